@@ -1,0 +1,64 @@
+# Test targets. Build them with the target `tests`, run them with ctest (README.md).
+find_package(GTest REQUIRED)
+if(NOT TARGET tests)
+  add_custom_target(tests)
+endif()
+
+set(SDS_TEST_DATA_DIR ${PROJECT_SOURCE_DIR}/test/data)
+set(SDS_TEST_OUTPUT_DIR ${CMAKE_BINARY_DIR}/test_output)
+file(MAKE_DIRECTORY ${SDS_TEST_OUTPUT_DIR})
+
+# One gtest program per core module (test/<module>/*.cpp), linked against the core only.
+foreach(module ${SDS_CORE_MODULES})
+  file(GLOB test_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/${module}/*.cpp)
+  if(NOT test_sources)
+    continue()
+  endif()
+  set(target test_core_${module})
+  add_executable(${target} EXCLUDE_FROM_ALL ${test_sources})
+  target_link_libraries(${target} scale_drift_slam_core GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${target} PRIVATE
+    SDS_TEST_DATA_DIR="${SDS_TEST_DATA_DIR}" SDS_TEST_OUTPUT_DIR="${SDS_TEST_OUTPUT_DIR}")
+  add_dependencies(tests ${target})
+  add_test(NAME ${target} COMMAND ${target}
+           --gtest_output=xml:${SDS_TEST_OUTPUT_DIR}/${target}.xml)
+  set_tests_properties(${target} PROPERTIES LABELS "core")
+endforeach()
+
+# The core must stay ROS-free: no ROS include in its sources, no ROS library in its link line.
+file(GENERATE OUTPUT ${CMAKE_BINARY_DIR}/core_link_libraries.txt
+     CONTENT "$<TARGET_PROPERTY:scale_drift_slam_core,LINK_LIBRARIES>\n")
+string(REPLACE ";" "," sds_core_modules_csv "${SDS_CORE_MODULES}")
+add_test(NAME core_is_ros_free
+         COMMAND ${CMAKE_COMMAND}
+                 -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -DMODULES=${sds_core_modules_csv}
+                 -DLINK_FILE=${CMAKE_BINARY_DIR}/core_link_libraries.txt
+                 -DCORE_LIBRARY=$<TARGET_FILE:scale_drift_slam_core>
+                 -P ${PROJECT_SOURCE_DIR}/cmake/check_core_ros_free.cmake)
+set_tests_properties(core_is_ros_free PROPERTIES LABELS "core")
+
+# ROS-layer tests (gtest without a master) and integration tests (rostest).
+file(GLOB ros_test_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/ros/*.cpp)
+if(ros_test_sources)
+  catkin_add_gtest(test_ros_layer ${ros_test_sources})
+  target_link_libraries(test_ros_layer scale_drift_slam_ros ${GTEST_MAIN_LIBRARIES})
+  target_compile_definitions(test_ros_layer PRIVATE SDS_TEST_DATA_DIR="${SDS_TEST_DATA_DIR}")
+endif()
+
+find_package(rostest REQUIRED)
+file(GLOB rostest_files CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/rostest/*.test)
+foreach(rostest_file ${rostest_files})
+  add_rostest(${rostest_file})
+endforeach()
+
+# Tests of the command-line tools and scripts (test/tools/*.sh), run with the devel environment.
+file(GLOB tool_tests CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/tools/test_*.sh)
+foreach(tool_test ${tool_tests})
+  get_filename_component(name ${tool_test} NAME_WE)
+  add_test(NAME tool_${name}
+           COMMAND ${CATKIN_DEVEL_PREFIX}/env.sh bash ${tool_test}
+           WORKING_DIRECTORY ${SDS_TEST_OUTPUT_DIR})
+  set_tests_properties(tool_${name} PROPERTIES LABELS "tools"
+    ENVIRONMENT "SDS_BIN_DIR=${CATKIN_DEVEL_PREFIX}/lib/${PROJECT_NAME};SDS_TEST_DATA_DIR=${SDS_TEST_DATA_DIR};SDS_TEST_OUTPUT_DIR=${SDS_TEST_OUTPUT_DIR}")
+endforeach()

@@ -1,0 +1,42 @@
+#pragma once
+// The calibration of one camera as plain data, independent of ROS and of any file format. It is
+// what a calibration YAML (io/calibration_io.h) or a sensor_msgs/CameraInfo (src/ros) becomes.
+
+#include <string>
+#include <vector>
+
+namespace scale_drift_slam::geometry {
+
+/// Lens models. Names follow ROS CameraInfo: plumb_bob (= OpenCV radial-tangential) and
+/// equidistant (= OpenCV fisheye, Kannala-Brandt).
+enum class DistortionModel {
+  kRadialTangential,  ///< k1 k2 p1 p2 [k3]; none at all means a linear pinhole.
+  kEquidistant,       ///< k1 k2 k3 k4.
+};
+
+/// Parses the model names used by ROS, OpenCV, Kalibr and EuRoC ("plumb_bob", "radtan",
+/// "radial-tangential", "pinhole", "none", "equidistant", "fisheye", "kannala_brandt").
+/// Throws std::invalid_argument naming the accepted spellings.
+DistortionModel parseDistortionModel(const std::string& name);
+/// "plumb_bob" or "equidistant" (the ROS CameraInfo names).
+std::string distortionModelName(DistortionModel model);
+
+struct CameraCalibration {
+  DistortionModel model = DistortionModel::kRadialTangential;
+  double fx = 0.0;
+  double fy = 0.0;
+  double cx = 0.0;
+  double cy = 0.0;
+  int width = 0;
+  int height = 0;
+  std::vector<double> distortion;  ///< Coefficients in the order of the model (above).
+
+  /// Throws std::invalid_argument with the reason when the calibration cannot be used: a
+  /// non-positive or non-finite focal length, a principal point far off the image, a
+  /// non-positive image size, the wrong number of coefficients or a NaN coefficient.
+  void validate() const;
+  /// One line for logs: "plumb_bob 640x480 fx=.. fy=.. cx=.. cy=.. d=[..]".
+  std::string describe() const;
+};
+
+}  // namespace scale_drift_slam::geometry

@@ -1,0 +1,72 @@
+#include "scale_drift_slam/map/map.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace scale_drift_slam::map {
+
+Keyframe& Map::addKeyframe(Keyframe keyframe) {
+  const KeyframeId id = keyframe.id;
+  if (hasKeyframe(id)) {
+    throw std::invalid_argument("keyframe " + std::to_string(id) + " is already in the map");
+  }
+  for (const Observation& observation : keyframe.observations) {
+    if (!hasPoint(observation.point_id)) {
+      throw std::invalid_argument("keyframe " + std::to_string(id) + " observes unknown point " +
+                                  std::to_string(observation.point_id));
+    }
+  }
+  for (const Observation& observation : keyframe.observations) {
+    points_.at(observation.point_id).observed_by.push_back(id);
+  }
+  num_observations_ += keyframe.observations.size();
+  ++version_;
+  return keyframes_.emplace(id, std::move(keyframe)).first->second;
+}
+
+MapPoint& Map::addPoint(MapPoint point) {
+  if (hasPoint(point.id)) {
+    throw std::invalid_argument("point " + std::to_string(point.id) + " is already in the map");
+  }
+  if (!point.p_world.allFinite()) {
+    throw std::invalid_argument("point " + std::to_string(point.id) + " has a non-finite position");
+  }
+  ++version_;
+  const PointId id = point.id;
+  return points_.emplace(id, std::move(point)).first->second;
+}
+
+void Map::addObservation(KeyframeId keyframe_id, PointId point_id, const Eigen::Vector2d& xy) {
+  if (!hasKeyframe(keyframe_id)) {
+    throw std::invalid_argument("observation in unknown keyframe " + std::to_string(keyframe_id));
+  }
+  if (!hasPoint(point_id)) {
+    throw std::invalid_argument("observation of unknown point " + std::to_string(point_id));
+  }
+  keyframes_.at(keyframe_id).observations.push_back({point_id, xy});
+  points_.at(point_id).observed_by.push_back(keyframe_id);
+  ++num_observations_;
+  ++version_;
+}
+
+const Keyframe& Map::keyframe(KeyframeId id) const {
+  const auto it = keyframes_.find(id);
+  if (it == keyframes_.end()) throw std::out_of_range("no keyframe " + std::to_string(id));
+  return it->second;
+}
+
+Keyframe& Map::keyframe(KeyframeId id) {
+  return const_cast<Keyframe&>(static_cast<const Map&>(*this).keyframe(id));
+}
+
+const MapPoint& Map::point(PointId id) const {
+  const auto it = points_.find(id);
+  if (it == points_.end()) throw std::out_of_range("no point " + std::to_string(id));
+  return it->second;
+}
+
+MapPoint& Map::point(PointId id) {
+  return const_cast<MapPoint&>(static_cast<const Map&>(*this).point(id));
+}
+
+}  // namespace scale_drift_slam::map
