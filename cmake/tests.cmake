@@ -62,3 +62,16 @@ foreach(tool_test ${tool_tests})
   set_tests_properties(tool_${name} PROPERTIES LABELS "tools"
     ENVIRONMENT "SDS_BIN_DIR=${CATKIN_DEVEL_PREFIX}/lib/${PROJECT_NAME};SDS_TEST_DATA_DIR=${SDS_TEST_DATA_DIR};SDS_TEST_OUTPUT_DIR=${SDS_TEST_OUTPUT_DIR}")
 endforeach()
+
+# Benchmarks (test/bench/bench_<name>.cpp): built by the target `benchmarks`, run by scripts/bench,
+# never by ctest. They measure; they assert nothing about time.
+add_custom_target(benchmarks)
+file(GLOB bench_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/bench/bench_*.cpp)
+foreach(bench_source ${bench_sources})
+  get_filename_component(name ${bench_source} NAME_WE)
+  add_executable(${name} EXCLUDE_FROM_ALL ${bench_source})
+  target_link_libraries(${name} scale_drift_slam_core)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/test/bench)
+  target_compile_definitions(${name} PRIVATE SDS_TEST_DATA_DIR="${SDS_TEST_DATA_DIR}")
+  add_dependencies(benchmarks ${name})
+endforeach()
