@@ -29,8 +29,7 @@ geometry::Sim3 alignSim3(const std::vector<Eigen::Vector3d>& estimate,
   const Eigen::Matrix4d M = umeyama(estimate, truth, true);
   const Eigen::Matrix3d sR = M.topLeftCorner<3, 3>();
   const double scale = std::cbrt(sR.determinant());
-  return geometry::Sim3::fromScale(Eigen::Quaterniond(sR / scale), M.topRightCorner<3, 1>(),
-                                   scale);
+  return geometry::Sim3::fromScale(Eigen::Quaterniond(sR / scale), M.topRightCorner<3, 1>(), scale);
 }
 
 geometry::SE3 alignSE3(const std::vector<Eigen::Vector3d>& estimate,
@@ -45,7 +44,8 @@ double positionRmse(const std::vector<Eigen::Vector3d>& estimate,
     throw std::invalid_argument("RMSE needs two non-empty lists of equal size");
   }
   double sum = 0.0;
-  for (size_t i = 0; i < estimate.size(); ++i) sum += (estimate[i] - truth[i]).squaredNorm();
+  for (size_t i = 0; i < estimate.size(); ++i)
+    sum += (estimate[i] - truth[i]).squaredNorm();
   return std::sqrt(sum / static_cast<double>(estimate.size()));
 }
 
@@ -69,7 +69,8 @@ FirstPoseAlignedError firstPoseAlignedError(const std::vector<geometry::SE3>& T_
   }
   FirstPoseAlignedError result;
   result.scale = denominator > 0.0 ? numerator / denominator : 1.0;
-  for (Eigen::Vector3d& e : estimate) e *= result.scale;
+  for (Eigen::Vector3d& e : estimate)
+    e *= result.scale;
   result.rmse = positionRmse(estimate, truth);
   return result;
 }

@@ -69,9 +69,10 @@ void CameraCalibration::validate() const {
 
 std::string CameraCalibration::describe() const {
   std::ostringstream s;
-  s << distortionModelName(model) << " " << width << "x" << height << " fx=" << fx
-    << " fy=" << fy << " cx=" << cx << " cy=" << cy << " d=[";
-  for (size_t i = 0; i < distortion.size(); ++i) s << (i ? " " : "") << distortion[i];
+  s << distortionModelName(model) << " " << width << "x" << height << " fx=" << fx << " fy=" << fy
+    << " cx=" << cx << " cy=" << cy << " d=[";
+  for (size_t i = 0; i < distortion.size(); ++i)
+    s << (i ? " " : "") << distortion[i];
   s << "]";
   return s.str();
 }

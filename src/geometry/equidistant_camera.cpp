@@ -7,7 +7,8 @@ namespace scale_drift_slam::geometry {
 
 EquidistantCamera::EquidistantCamera(const CameraCalibration& calibration)
     : CameraModel(calibration) {
-  for (int i = 0; i < 4; ++i) k_[i] = calibration_.distortion[i];
+  for (int i = 0; i < 4; ++i)
+    k_[i] = calibration_.distortion[i];
   // theta_d must keep increasing (else the model folds back) ...
   double fold_theta = M_PI;
   for (double theta = 1e-3; theta < M_PI; theta += 1e-3) {
@@ -22,13 +23,14 @@ EquidistantCamera::EquidistantCamera(const CameraCalibration& calibration)
   double corner_theta_d = 0.0;
   for (double u : {0.0, calibration_.width - 1.0}) {
     for (double v : {0.0, calibration_.height - 1.0}) {
-      corner_theta_d = std::max(corner_theta_d, std::hypot((u - calibration_.cx) / calibration_.fx,
-                                                           (v - calibration_.cy) / calibration_.fy));
+      corner_theta_d =
+          std::max(corner_theta_d, std::hypot((u - calibration_.cx) / calibration_.fx,
+                                              (v - calibration_.cy) / calibration_.fy));
     }
   }
   max_theta_ = fold_theta;
-  const double corner_theta = std::acos(unproject({calibration_.cx + corner_theta_d * calibration_.fx,
-                                                   calibration_.cy}).z());
+  const double corner_theta = std::acos(
+      unproject({calibration_.cx + corner_theta_d * calibration_.fx, calibration_.cy}).z());
   max_theta_ = std::min(fold_theta, corner_theta + 10.0 * M_PI / 180.0);
 }
 
@@ -48,8 +50,8 @@ std::optional<Eigen::Vector2d> EquidistantCamera::project(const Eigen::Vector3d&
   const double theta = std::atan2(rho, p_cam.z());
   if (!(theta < max_theta_) || (rho == 0.0 && p_cam.z() <= 0.0)) return std::nullopt;
   // theta_d / rho; near the axis theta ~ rho / z, so the ratio tends to 1/z.
-  const double scale = rho > 1e-12 * std::abs(p_cam.z()) ? distortAngle(theta) / rho
-                                                         : 1.0 / p_cam.z();
+  const double scale =
+      rho > 1e-12 * std::abs(p_cam.z()) ? distortAngle(theta) / rho : 1.0 / p_cam.z();
   return Eigen::Vector2d(calibration_.fx * scale * p_cam.x() + calibration_.cx,
                          calibration_.fy * scale * p_cam.y() + calibration_.cy);
 }

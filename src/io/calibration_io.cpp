@@ -60,8 +60,8 @@ CameraCalibration parseCalibrationYaml(const std::string& text, const std::strin
   }
 
   if (root["camera_matrix"]) {  // ROS camera_calibration_parsers layout
-    const std::vector<double> k = readSequence(root["camera_matrix"]["data"], origin,
-                                               "camera_matrix.data");
+    const std::vector<double> k =
+        readSequence(root["camera_matrix"]["data"], origin, "camera_matrix.data");
     if (k.size() != 9) fail(origin, "camera_matrix.data must hold 9 numbers");
     calibration.fx = k[0];
     calibration.cx = k[2];
@@ -95,8 +95,8 @@ CameraCalibration parseCalibrationYaml(const std::string& text, const std::strin
     calibration.cy = read<double>(root, "cy", origin);
     calibration.width = read<int>(root, "width", origin);
     calibration.height = read<int>(root, "height", origin);
-    if (root["distortion"]) calibration.distortion = readSequence(root["distortion"], origin,
-                                                                  "distortion");
+    if (root["distortion"])
+      calibration.distortion = readSequence(root["distortion"], origin, "distortion");
   }
   // A five-element plumb_bob list of zeros is the same as none; keep it as the user wrote it.
   try {

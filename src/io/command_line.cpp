@@ -36,7 +36,9 @@ const std::string& CommandLine::positional(std::size_t i, const std::string& wha
   return positional_[i];
 }
 
-bool CommandLine::has(const std::string& flag) const { return value(flag).has_value(); }
+bool CommandLine::has(const std::string& flag) const {
+  return value(flag).has_value();
+}
 
 std::optional<std::string> CommandLine::value(const std::string& flag) const {
   std::optional<std::string> result;

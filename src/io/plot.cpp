@@ -96,7 +96,8 @@ cv::Mat renderPlot(const std::vector<PlotSeries>& series, const PlotOptions& opt
       if (p.allFinite()) pixels.push_back(to_pixel(p));
     }
     if (s.dots) {
-      for (const cv::Point& p : pixels) cv::circle(image, p, s.thickness, s.color, cv::FILLED);
+      for (const cv::Point& p : pixels)
+        cv::circle(image, p, s.thickness, s.color, cv::FILLED);
     } else if (pixels.size() >= 2) {
       cv::polylines(image, pixels, false, s.color, s.thickness, cv::LINE_AA);
     }

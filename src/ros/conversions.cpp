@@ -80,9 +80,9 @@ geometry_msgs::Transform toTransformMsg(const geometry::SE3& T) {
 }
 
 geometry::SE3 fromTransformMsg(const geometry_msgs::Transform& transform) {
-  return geometry::SE3(fromQuaternionMsg(transform.rotation),
-                       Eigen::Vector3d(transform.translation.x, transform.translation.y,
-                                       transform.translation.z));
+  return geometry::SE3(
+      fromQuaternionMsg(transform.rotation),
+      Eigen::Vector3d(transform.translation.x, transform.translation.y, transform.translation.z));
 }
 
 scale_drift_slam::Sim3 toSim3Msg(const geometry::Sim3& S) {

@@ -32,14 +32,15 @@ class Report {
     for (int i = 0; i < repetitions; ++i) {
       const auto start = std::chrono::steady_clock::now();
       work();
-      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                             start)
-                       .count());
+      ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count());
     }
     std::sort(ms.begin(), ms.end());
     const double median = ms[ms.size() / 2];
-    add(figure, median, "ms", note + (note.empty() ? "" : "; ") + "median of " +
-                                  std::to_string(repetitions) + ", min " + format(ms.front()));
+    add(figure, median, "ms",
+        note + (note.empty() ? "" : "; ") + "median of " + std::to_string(repetitions) + ", min " +
+            format(ms.front()));
     return median;
   }
 

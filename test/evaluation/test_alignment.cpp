@@ -23,21 +23,25 @@ TEST(Alignment, Sim3RecoversAKnownSimilarity) {
   const geometry::Sim3 S_truth_est = geometry::Sim3::exp(xi);
   const std::vector<Eigen::Vector3d> truth = helix(100);
   std::vector<Eigen::Vector3d> estimate;
-  for (const auto& p : truth) estimate.push_back(S_truth_est.inverse() * p);
+  for (const auto& p : truth)
+    estimate.push_back(S_truth_est.inverse() * p);
   const geometry::Sim3 S = alignSim3(estimate, truth);
   EXPECT_LT((S.matrix() - S_truth_est.matrix()).norm(), 1e-9);
   std::vector<Eigen::Vector3d> aligned;
-  for (const auto& p : estimate) aligned.push_back(S * p);
+  for (const auto& p : estimate)
+    aligned.push_back(S * p);
   EXPECT_LT(positionRmse(aligned, truth), 1e-9);
 }
 
 TEST(Alignment, Se3KeepsTheScale) {
   const std::vector<Eigen::Vector3d> truth = helix(50);
   std::vector<Eigen::Vector3d> estimate;
-  for (const auto& p : truth) estimate.push_back(2.0 * p);  // twice too large
+  for (const auto& p : truth)
+    estimate.push_back(2.0 * p);  // twice too large
   const geometry::SE3 T = alignSE3(estimate, truth);
   std::vector<Eigen::Vector3d> aligned;
-  for (const auto& p : estimate) aligned.push_back(T * p);
+  for (const auto& p : estimate)
+    aligned.push_back(T * p);
   EXPECT_GT(positionRmse(aligned, truth), 1.0);
   EXPECT_THROW(alignSim3({Eigen::Vector3d::Zero()}, {Eigen::Vector3d::Zero()}),
                std::invalid_argument);

@@ -17,8 +17,8 @@ namespace {
 
 /// Rotation magnitudes that exercise every branch: zero, the Taylor series, the closed forms,
 /// and the neighbourhood of theta = pi.
-const std::vector<double> kAngles = {0.0,  1e-12, 1e-8, 1e-5, 1e-3, 0.02,         0.5,
-                                     2.0, 3.0,   M_PI - 1e-3, M_PI - 1e-7, M_PI};
+const std::vector<double> kAngles = {0.0, 1e-12, 1e-8, 1e-5,        1e-3,        0.02,
+                                     0.5, 2.0,   3.0,  M_PI - 1e-3, M_PI - 1e-7, M_PI};
 /// Log-scales: zero, tiny, small and large (the Keble loop has sigma = 0.99).
 const std::vector<double> kSigmas = {0.0, 1e-12, -1e-7, 1e-4, -0.02, 0.3, 0.99, -2.5, 5.0};
 
@@ -66,8 +66,7 @@ void expectSameElement(const Group& a, const Group& b, double tolerance) {
 TEST(SE3, ExpMatchesMatrixExponentialOfHat) {
   for (const SE3::Tangent& xi : se3Samples()) {
     const Eigen::Matrix4d expected = SE3::hat(xi).exp();
-    EXPECT_LT((SE3::exp(xi).matrix() - expected).norm(), 1e-12 * expected.norm())
-        << xi.transpose();
+    EXPECT_LT((SE3::exp(xi).matrix() - expected).norm(), 1e-12 * expected.norm()) << xi.transpose();
   }
 }
 
@@ -99,7 +98,8 @@ TEST(Sim3, LogInvertsExp) {
 }
 
 TEST(SE3, HatVeeRoundTrip) {
-  for (const SE3::Tangent& xi : se3Samples()) EXPECT_EQ(SE3::vee(SE3::hat(xi)), xi);
+  for (const SE3::Tangent& xi : se3Samples())
+    EXPECT_EQ(SE3::vee(SE3::hat(xi)), xi);
 }
 
 TEST(Sim3, HatVeeRoundTrip) {
@@ -113,7 +113,8 @@ TEST(Sim3, GroupAxioms) {
   std::uniform_real_distribution<double> uniform(-2.0, 2.0);
   auto random_sim3 = [&] {
     Sim3::Tangent xi;
-    for (int i = 0; i < 7; ++i) xi[i] = uniform(rng);
+    for (int i = 0; i < 7; ++i)
+      xi[i] = uniform(rng);
     return Sim3::exp(xi);
   };
   for (int trial = 0; trial < 100; ++trial) {
@@ -134,7 +135,8 @@ TEST(SE3, GroupAxioms) {
   std::uniform_real_distribution<double> uniform(-3.0, 3.0);
   for (int trial = 0; trial < 100; ++trial) {
     SE3::Tangent u, v;
-    for (int i = 0; i < 6; ++i) u[i] = uniform(rng), v[i] = uniform(rng);
+    for (int i = 0; i < 6; ++i)
+      u[i] = uniform(rng), v[i] = uniform(rng);
     const SE3 a = SE3::exp(u), b = SE3::exp(v);
     const Eigen::Vector3d x(uniform(rng), uniform(rng), uniform(rng));
     expectSameElement(a * a.inverse(), SE3::identity(), 1e-12);
@@ -149,7 +151,8 @@ TEST(Sim3, AdjointMovesTangentsThroughTheGroup) {
   std::uniform_real_distribution<double> uniform(-1.5, 1.5);
   for (int trial = 0; trial < 50; ++trial) {
     Sim3::Tangent s_xi, delta;
-    for (int i = 0; i < 7; ++i) s_xi[i] = uniform(rng), delta[i] = 0.3 * uniform(rng);
+    for (int i = 0; i < 7; ++i)
+      s_xi[i] = uniform(rng), delta[i] = 0.3 * uniform(rng);
     const Sim3 S = Sim3::exp(s_xi);
     expectSameElement(S * Sim3::exp(delta) * S.inverse(), Sim3::exp(S.adjoint() * delta),
                       1e-10 * S.matrix().norm());
@@ -161,7 +164,8 @@ TEST(SE3, AdjointMovesTangentsThroughTheGroup) {
   std::uniform_real_distribution<double> uniform(-2.0, 2.0);
   for (int trial = 0; trial < 50; ++trial) {
     SE3::Tangent t_xi, delta;
-    for (int i = 0; i < 6; ++i) t_xi[i] = uniform(rng), delta[i] = 0.3 * uniform(rng);
+    for (int i = 0; i < 6; ++i)
+      t_xi[i] = uniform(rng), delta[i] = 0.3 * uniform(rng);
     const SE3 T = SE3::exp(t_xi);
     expectSameElement(T * SE3::exp(delta) * T.inverse(), SE3::exp(T.adjoint() * delta), 1e-10);
   }
@@ -226,10 +230,12 @@ TEST(Sim3, AutodiffThroughExpAndLogMatchesNumericDerivatives) {
       const Sim3 S = Sim3::exp(xi);
 
       Eigen::Matrix<Jet, 7, 1> delta;
-      for (int i = 0; i < 7; ++i) delta[i] = Jet(0.0, i);
+      for (int i = 0; i < 7; ++i)
+        delta[i] = Jet(0.0, i);
       const Eigen::Matrix<Jet, 7, 1> r = (Sim3T<Jet>::exp(delta) * S.cast<Jet>()).log();
       Eigen::Matrix<double, 7, 7> autodiff;
-      for (int i = 0; i < 7; ++i) autodiff.row(i) = r[i].v.transpose();
+      for (int i = 0; i < 7; ++i)
+        autodiff.row(i) = r[i].v.transpose();
 
       const auto numeric = numericJacobian<7, 7>(
           [&](const Sim3::Tangent& d) { return Sim3::Tangent((Sim3::exp(d) * S).log()); });
@@ -250,10 +256,12 @@ TEST(SE3, AutodiffThroughExpAndLogMatchesNumericDerivatives) {
     xi << randomVector(rng, theta), randomVector(rng, 1.5);
     const SE3 T = SE3::exp(xi);
     Eigen::Matrix<Jet, 6, 1> delta;
-    for (int i = 0; i < 6; ++i) delta[i] = Jet(0.0, i);
+    for (int i = 0; i < 6; ++i)
+      delta[i] = Jet(0.0, i);
     const Eigen::Matrix<Jet, 6, 1> r = (SE3T<Jet>::exp(delta) * T.cast<Jet>()).log();
     Eigen::Matrix<double, 6, 6> autodiff;
-    for (int i = 0; i < 6; ++i) autodiff.row(i) = r[i].v.transpose();
+    for (int i = 0; i < 6; ++i)
+      autodiff.row(i) = r[i].v.transpose();
     const auto numeric = numericJacobian<6, 6>(
         [&](const SE3::Tangent& d) { return SE3::Tangent((SE3::exp(d) * T).log()); });
     EXPECT_LT((autodiff - numeric).norm(), 1e-5 * std::max(1.0, numeric.norm())) << theta;

@@ -126,8 +126,7 @@ class SE3T {
     const T theta_sq = omega.squaredNorm();
     const Mat3<T> W = hatSO3(omega);
     if (theta_sq < T(1e-4)) {
-      return Mat3<T>::Identity() +
-             W * (T(0.5) - theta_sq / T(24) + theta_sq * theta_sq / T(720)) +
+      return Mat3<T>::Identity() + W * (T(0.5) - theta_sq / T(24) + theta_sq * theta_sq / T(720)) +
              W * W * (T(1) / T(6) - theta_sq / T(120) + theta_sq * theta_sq / T(5040));
     }
     const T theta = sqrt(theta_sq);
