@@ -112,51 +112,71 @@ cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::ui
   } else {
     image.setTo(cv::Scalar(rng.uniform(150, 215)));  // plaster: weakly textured
   }
-  // Storeys of windows above a ground floor; a plain band between storeys (weak texture).
-  const double storey = rng.uniform(2.8, 3.4);
-  const double spacing = rng.uniform(2.4, 3.4);
-  const double win_w = rng.uniform(0.9, 1.4), win_h = rng.uniform(1.3, 1.9);
+  // Storeys of windows above a 2.6 m ground floor; a plain band at each storey floor (weak
+  // texture). Rows of the texture run downwards from the top of the facade: y = height - z.
+  const double storey = rng.uniform(2.8, 3.4), ground_floor = 2.6;
+  const double spacing = rng.uniform(2.2, 3.2);
+  const double win_w = rng.uniform(0.9, 1.4), win_h = rng.uniform(1.3, 1.8);
   const int style = rng.uniform(0, 6);
   const int columns = static_cast<int>(width_m / spacing);
   const double margin = (width_m - columns * spacing) / 2 + spacing / 2;
-  for (double top = height_m - storey; top > 2.5; top -= storey) {
-    const int band_y = static_cast<int>((height_m - top - storey) * tpm);
-    cv::rectangle(image, cv::Rect(0, band_y, image.cols, static_cast<int>(0.25 * tpm)),
+  auto row_of = [&](double z) { return static_cast<int>((height_m - z) * tpm); };
+  for (double floor_z = ground_floor; floor_z + 2.2 < height_m; floor_z += storey) {
+    cv::rectangle(image, cv::Rect(0, row_of(floor_z + 0.25), image.cols, static_cast<int>(0.25 * tpm)),
                   cv::Scalar(rng.uniform(170, 235)), cv::FILLED);
     for (int c = 0; c < columns; ++c) {
       if (rng.uniform(0, 9) == 0) continue;  // a missing window
       const double cx = margin + c * spacing;
-      const cv::Rect box(static_cast<int>((cx - win_w / 2) * tpm),
-                         static_cast<int>((height_m - top - storey + 0.8) * tpm),
+      const cv::Rect box(static_cast<int>((cx - win_w / 2) * tpm), row_of(floor_z + 0.8 + win_h),
                          static_cast<int>(win_w * tpm), static_cast<int>(win_h * tpm));
-      drawWindow(image, box, style, rng);
+      if (box.y >= 0) drawWindow(image, box, style, rng);
     }
   }
-  // Ground floor: doors, posters, a named sign, a shop window.
-  const int ground_y = static_cast<int>((height_m - 2.6) * tpm);
-  for (double x = rng.uniform(0.3, 1.5); x < width_m - 1.6;) {
-    const int kind = rng.uniform(0, 4);
+  // Ground floor: a dense mix of doors, shop windows, posters, notice boards, grilles and signs,
+  // with short plain gaps.
+  const int ground_y = row_of(ground_floor);
+  for (double x = rng.uniform(0.1, 0.6); x < width_m - 2.6;) {
+    const int kind = rng.uniform(0, 6);
     const int px = static_cast<int>(x * tpm);
+    double used = 0.0;
     if (kind == 0) {
-      drawDoor(image, cv::Rect(px, ground_y + static_cast<int>(0.4 * tpm), static_cast<int>(1.1 * tpm),
-                               static_cast<int>(2.15 * tpm)), rng);
-      x += 1.1;
-    } else if (kind == 1) {
-      const cv::Size size(static_cast<int>(rng.uniform(0.6, 1.2) * tpm),
-                          static_cast<int>(rng.uniform(0.8, 1.4) * tpm));
-      poster(size, rng).copyTo(image(cv::Rect(px, ground_y + static_cast<int>(0.7 * tpm), size.width, size.height)));
-      x += size.width / tpm;
+      drawDoor(image, cv::Rect(px, row_of(2.15), static_cast<int>(1.1 * tpm), static_cast<int>(2.15 * tpm)), rng);
+      used = 1.1;
+    } else if (kind == 1 || kind == 4) {
+      const double w = rng.uniform(0.5, 1.1), h = rng.uniform(0.7, 1.3), bottom = rng.uniform(0.6, 1.0);
+      poster(cv::Size(static_cast<int>(w * tpm), static_cast<int>(h * tpm)), rng)
+          .copyTo(image(cv::Rect(px, row_of(bottom + h), static_cast<int>(w * tpm), static_cast<int>(h * tpm))));
+      used = w;
     } else if (kind == 2) {
-      drawWindow(image, cv::Rect(px, ground_y + static_cast<int>(0.5 * tpm),
-                                 static_cast<int>(1.5 * tpm), static_cast<int>(1.6 * tpm)), 4, rng);
-      x += 1.5;
+      const double w = rng.uniform(1.4, 2.4);
+      drawWindow(image, cv::Rect(px, row_of(2.2), static_cast<int>(w * tpm), static_cast<int>(1.7 * tpm)), 4, rng);
+      used = w;
+    } else if (kind == 3) {  // notice board: cork with small notes
+      const cv::Rect board(px, row_of(2.0), static_cast<int>(1.2 * tpm), static_cast<int>(0.9 * tpm));
+      cv::Mat cork = fractalNoise(board.size(), 0.05 * tpm, 3, 0.7, rng);
+      cork.convertTo(image(board), CV_8U, 40, 140);
+      for (int k = rng.uniform(3, 7); k > 0; --k) {
+        const cv::Size note(static_cast<int>(rng.uniform(0.15, 0.3) * tpm), static_cast<int>(rng.uniform(0.18, 0.35) * tpm));
+        const cv::Point at(board.x + rng.uniform(0, board.width - note.width), board.y + rng.uniform(0, board.height - note.height));
+        poster(note, rng).copyTo(image(cv::Rect(at, note)));
+      }
+      used = 1.2;
+    } else {  // ventilation grille: repetitive slats
+      const cv::Rect grille(px, row_of(rng.uniform(0.6, 1.8)), static_cast<int>(0.8 * tpm), static_cast<int>(0.5 * tpm));
+      image(grille).setTo(cv::Scalar(rng.uniform(40, 90)));
+      for (int y = grille.y; y < grille.br().y; y += std::max(3, static_cast<int>(0.04 * tpm))) {
+        cv::line(image, {grille.x, y}, {grille.br().x - 1, y}, cv::Scalar(rng.uniform(150, 220)), 1);
+      }
+      used = 0.8;
     }
-    x += rng.uniform(0.4, 1.8);
+    x += used + rng.uniform(0.15, 0.9);
   }
-  const cv::Rect sign(static_cast<int>(rng.uniform(0.1, 0.5) * image.cols), ground_y,
-                      static_cast<int>(0.35 * image.cols), static_cast<int>(0.3 * tpm));
-  cv::rectangle(image, sign & cv::Rect(0, 0, image.cols, image.rows), cv::Scalar(rng.uniform(20, 60)), cv::FILLED);
-  drawTextInBox(image, randomWord(rng, 2, 4), sign, 235, cv::FONT_HERSHEY_TRIPLEX, std::max(1, sign.height / 12));
+  for (int k = rng.uniform(1, 3); k > 0; --k) {
+    const cv::Rect sign(rng.uniform(0, image.cols - static_cast<int>(3.5 * tpm)), ground_y - static_cast<int>(0.1 * tpm),
+                        static_cast<int>(rng.uniform(1.5, 3.5) * tpm), static_cast<int>(0.3 * tpm));
+    cv::rectangle(image, sign, cv::Scalar(rng.uniform(20, 60)), cv::FILLED);
+    drawTextInBox(image, randomWord(rng, 2, 3), sign, 235, cv::FONT_HERSHEY_TRIPLEX, std::max(1, sign.height / 12));
+  }
   // Drain pipes and climbing plants.
   for (int k = rng.uniform(1, 3); k > 0; --k) {
     const int x = rng.uniform(0, image.cols);
@@ -164,7 +184,7 @@ cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::ui
   }
   cv::Mat plant = fractalNoise(image.size(), 1.5 * tpm, 6, 0.6, rng);
   cv::Mat leaves = fractalNoise(image.size(), 0.1 * tpm, 3, 0.7, rng);
-  cv::Mat plant_mask = plant > 0.45f;
+  cv::Mat plant_mask = plant > 0.55f;
   cv::Mat leaf_image;
   leaves.convertTo(leaf_image, CV_8U, 90, 60);
   leaf_image.copyTo(image, plant_mask);
@@ -209,60 +229,130 @@ cv::Mat pavedGround(double width_m, double depth_m, double texels_per_metre, std
   return image;
 }
 
+namespace {
+
+/// Fractal noise that is periodic in x (drawn wider, the extra columns blended onto the start).
+cv::Mat periodicNoise(cv::Size size, double period, int octaves, cv::RNG& rng) {
+  const int wrap = std::max(2, size.width / 8);
+  cv::Mat wide = fractalNoise(cv::Size(size.width + wrap, size.height), period, octaves, 0.6, rng);
+  cv::Mat result = wide(cv::Rect(0, 0, size.width, size.height)).clone();
+  for (int x = 0; x < wrap; ++x) {
+    const double w = static_cast<double>(x) / wrap;
+    cv::addWeighted(wide.col(size.width + x), 1.0 - w, wide.col(x), w, 0.0, result.col(x));
+  }
+  return result;
+}
+
+struct Field {
+  int kind = 0;  ///< 0 crop rows, 1 meadow, 2 orchard, 3 forest, 4 water
+  float level = 128, amplitude = 20, period = 6;
+  float dx = 1, dy = 0;
+};
+
+float fieldValue(const Field& f, int x, int y, float fine) {
+  switch (f.kind) {
+    case 0:
+      return f.level + ((static_cast<int>(std::floor((x * f.dx + y * f.dy) / f.period)) & 1) ? f.amplitude : -f.amplitude) + 6 * fine;
+    case 1:
+      return f.level + 14 * fine;
+    case 2: {
+      const int gx = static_cast<int>(x * f.dx + y * f.dy) % static_cast<int>(f.period * 2);
+      const int gy = static_cast<int>(-x * f.dy + y * f.dx) % static_cast<int>(f.period * 2);
+      return (std::abs(gx) < 3 && std::abs(gy) < 3) ? f.level - 70 : f.level + 8 * fine;
+    }
+    case 3:
+      return f.level - 40 + 45 * fine;
+    default:
+      return 50 + 3 * fine;
+  }
+}
+
+}  // namespace
+
 cv::Mat terrain(int height, std::uint32_t seed) {
   cv::RNG rng(0x7e770000ULL + seed);
-  const int width = 2 * height, wrap = height / 4;  // drawn wider, then blended across the seam
-  cv::Mat wide(height, width + wrap, CV_8U);
-  cv::Mat base = fractalNoise(wide.size(), height / 4.0, 7, 0.55, rng);
-  base.convertTo(wide, CV_8U, 60, 120);
-  // Fields with crop rows: rotated ellipses filled with stripes.
-  for (int k = 0; k < 260; ++k) {
-    const cv::Point c(rng.uniform(0, wide.cols), rng.uniform(0, height));
-    const cv::Size2f axes(rng.uniform(height / 60, height / 15), rng.uniform(height / 60, height / 15));
-    const double angle = rng.uniform(0.0, 180.0);
-    const int reach = static_cast<int>(std::max(axes.width, axes.height) / 2) + 1;
-    const cv::Rect roi = cv::Rect(c.x - reach, c.y - reach, 2 * reach, 2 * reach) &
-                         cv::Rect(0, 0, wide.cols, wide.rows);
-    if (roi.empty()) continue;
-    cv::Mat mask(roi.size(), CV_8U, cv::Scalar(0));
-    cv::ellipse(mask, cv::RotatedRect(cv::Point2f(c - roi.tl()), axes, static_cast<float>(angle)),
-                cv::Scalar(255), cv::FILLED);
-    const double level = rng.uniform(60, 210), stripe = rng.uniform(3.0, 8.0);
-    const double dx = std::cos(angle * CV_PI / 180.0) / stripe, dy = std::sin(angle * CV_PI / 180.0) / stripe;
-    for (int y = 0; y < roi.height; ++y) {
-      for (int x = 0; x < roi.width; ++x) {
-        if (!mask.at<uchar>(y, x)) continue;
-        const int phase = static_cast<int>(std::floor(x * dx + y * dy));
-        wide.at<uchar>(roi.y + y, roi.x + x) = cv::saturate_cast<uchar>(level + ((phase & 1) ? 22 : -22));
+  const int width = 2 * height, margin = height / 8;
+  // Patchwork of fields: a Voronoi partition with periodic seeds (copies shifted by +-width), so
+  // that longitude 0 and 360 meet without a seam.
+  const int fields = width * height / (110 * 110);
+  cv::Mat seeds(height, width + 2 * margin, CV_8U, cv::Scalar(255));
+  std::vector<cv::Point> centres;
+  for (int k = 0; k < fields; ++k) centres.emplace_back(rng.uniform(0, width), rng.uniform(0, height));
+  for (const cv::Point& c : centres) {
+    for (int shift : {-width, 0, width}) {
+      const int x = c.x + shift + margin;
+      if (x >= 0 && x < seeds.cols) seeds.at<uchar>(c.y, x) = 0;
+    }
+  }
+  cv::Mat distance, labels;
+  cv::distanceTransform(seeds, distance, labels, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
+  std::vector<int> field_of_label(static_cast<size_t>(fields) * 3 + 2, 0);
+  for (int k = 0; k < fields; ++k) {
+    for (int shift : {-width, 0, width}) {
+      const int x = centres[static_cast<size_t>(k)].x + shift + margin;
+      if (x < 0 || x >= seeds.cols) continue;
+      const int label = labels.at<int>(centres[static_cast<size_t>(k)].y, x);
+      if (label >= 0 && static_cast<size_t>(label) < field_of_label.size()) field_of_label[static_cast<size_t>(label)] = k;
+    }
+  }
+  std::vector<Field> params(static_cast<size_t>(fields));
+  for (Field& f : params) {
+    const int r = rng.uniform(0, 20);
+    f.kind = r < 10 ? 0 : r < 14 ? 1 : r < 16 ? 2 : r < 19 ? 3 : 4;
+    f.level = static_cast<float>(rng.uniform(70, 200));
+    f.amplitude = static_cast<float>(rng.uniform(10, 35));
+    f.period = static_cast<float>(rng.uniform(3.0, 9.0));
+    const double angle = rng.uniform(0.0, CV_PI);
+    f.dx = static_cast<float>(std::cos(angle));
+    f.dy = static_cast<float>(std::sin(angle));
+  }
+  const cv::Mat fine = periodicNoise(cv::Size(width, height), 6.0, 3, rng);
+  cv::Mat image(height, width, CV_8U);
+  for (int y = 0; y < height; ++y) {
+    const int* label = labels.ptr<int>(y) + margin;
+    const float* noise = fine.ptr<float>(y);
+    uchar* out = image.ptr<uchar>(y);
+    for (int x = 0; x < width; ++x) {
+      const int id = field_of_label[static_cast<size_t>(std::min<int>(label[x], static_cast<int>(field_of_label.size()) - 1))];
+      float v = fieldValue(params[static_cast<size_t>(id)], x, y, noise[x]);
+      // Hedges and tracks along the field borders.
+      const int right = label[x + 1 < width + margin ? x + 1 : x], below = y + 1 < height ? labels.ptr<int>(y + 1)[margin + x] : label[x];
+      if (field_of_label[static_cast<size_t>(std::min<int>(right, static_cast<int>(field_of_label.size()) - 1))] != id ||
+          field_of_label[static_cast<size_t>(std::min<int>(below, static_cast<int>(field_of_label.size()) - 1))] != id) {
+        v = 35;
+      }
+      out[x] = cv::saturate_cast<uchar>(v);
+    }
+  }
+  cv::erode(image, image, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2, 2)));
+  // Villages and roads, drawn three times (shifted by +-width) to wrap around.
+  for (int k = 0; k < width * height / 60000; ++k) {
+    const cv::Point c(rng.uniform(0, width), rng.uniform(0, height));
+    for (int b = rng.uniform(3, 12); b > 0; --b) {
+      const cv::Rect house(c.x + rng.uniform(-60, 60), c.y + rng.uniform(-60, 60), rng.uniform(8, 30), rng.uniform(8, 30));
+      const cv::Scalar roof(rng.uniform(0, 2) ? rng.uniform(200, 250) : rng.uniform(20, 60));
+      for (int shift : {-width, 0, width}) {
+        cv::rectangle(image, house + cv::Point(shift, 0), roof, cv::FILLED);
+        cv::line(image, house.tl() + cv::Point(shift, house.height / 2), house.br() + cv::Point(shift, -house.height / 2),
+                 cv::Scalar(110), 1);
       }
     }
   }
-  // Lakes (weakly textured), villages, roads.
-  cv::Mat water = fractalNoise(wide.size(), height / 6.0, 5, 0.5, rng);
-  wide.setTo(cv::Scalar(45), water > 0.5f);
-  for (int k = 0; k < 90; ++k) {
-    const cv::Point c(rng.uniform(0, wide.cols), rng.uniform(0, height));
-    for (int b = rng.uniform(4, 14); b > 0; --b) {
-      const cv::Rect house(c.x + rng.uniform(-height / 60, height / 60), c.y + rng.uniform(-height / 60, height / 60),
-                           rng.uniform(3, height / 90 + 4), rng.uniform(3, height / 90 + 4));
-      cv::rectangle(wide, house, cv::Scalar(rng.uniform(0, 2) ? 235 : 30), cv::FILLED);
+  for (int k = 0; k < width * height / 200000; ++k) {
+    std::vector<cv::Point> road = {{rng.uniform(0, width), rng.uniform(0, height)}};
+    for (int s = 0; s < 8; ++s) road.push_back(road.back() + cv::Point(rng.uniform(-300, 300), rng.uniform(-300, 300)));
+    const cv::Scalar colour(rng.uniform(0, 2) ? 215 : 25);
+    for (int shift : {-width, 0, width}) {
+      std::vector<cv::Point> shifted;
+      for (const cv::Point& p : road) shifted.push_back(p + cv::Point(shift, 0));
+      cv::polylines(image, shifted, false, colour, 5, cv::LINE_AA);
     }
   }
-  for (int k = 0; k < 40; ++k) {
-    std::vector<cv::Point> road = {{rng.uniform(0, wide.cols), rng.uniform(0, height)}};
-    for (int s = 0; s < 6; ++s) {
-      road.push_back(road.back() + cv::Point(rng.uniform(-height / 8, height / 8), rng.uniform(-height / 8, height / 8)));
-    }
-    cv::polylines(wide, road, false, cv::Scalar(rng.uniform(0, 2) ? 200 : 25), std::max(1, height / 700 + 1), cv::LINE_AA);
-  }
-  addNoise(wide, 12, 6.0, 2, rng);
-  // Blend the extra columns onto the start so that longitude 0 and 360 meet without a seam.
-  cv::Mat result = wide(cv::Rect(0, 0, width, height)).clone();
-  for (int x = 0; x < wrap; ++x) {
-    const double w = static_cast<double>(x) / wrap;
-    cv::addWeighted(wide.col(width + x), 1.0 - w, wide.col(x), w, 0.0, result.col(x));
-  }
-  return result;
+  cv::Mat as_float;
+  image.convertTo(as_float, CV_32F);
+  as_float += 25.0 * periodicNoise(image.size(), height / 5.0, 5, rng);
+  as_float.convertTo(image, CV_8U);
+  return image;
 }
 
 }  // namespace scale_drift_slam::sim::textures
