@@ -63,8 +63,9 @@ Scenario makeCourtyardLoop(std::uint32_t seed) {
   const Eigen::Vector3d corners[4] = {{-kHalfCourt, -kHalfCourt, 0}, {kHalfCourt, -kHalfCourt, 0},
                                       {kHalfCourt, kHalfCourt, 0}, {-kHalfCourt, kHalfCourt, 0}};
   const float gains[4] = {1.0f, 0.82f, 0.66f, 0.9f};
-  const Eigen::Vector3f tints[4] = {{0.8f, 0.95f, 1.2f}, {0.9f, 1.0f, 1.05f}, {0.85f, 1.0f, 1.1f},
-                                    {1.0f, 1.0f, 1.0f}};
+  // B, G, R: brick red, sandstone, grey-blue, warm white.
+  const Eigen::Vector3f tints[4] = {{0.65f, 0.9f, 1.45f}, {0.7f, 1.0f, 1.25f}, {1.2f, 1.0f, 0.9f},
+                                    {0.9f, 1.0f, 1.08f}};
   cv::RNG rng(seed);
   for (int k = 0; k < 4; ++k) {
     const double height = rng.uniform(10.0, 13.0);

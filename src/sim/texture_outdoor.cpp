@@ -182,12 +182,14 @@ cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::ui
     const int x = rng.uniform(0, image.cols);
     cv::line(image, {x, 0}, {x, image.rows}, cv::Scalar(rng.uniform(30, 90)), std::max(2, static_cast<int>(0.08 * tpm)));
   }
-  cv::Mat plant = fractalNoise(image.size(), 1.5 * tpm, 6, 0.6, rng);
-  cv::Mat leaves = fractalNoise(image.size(), 0.1 * tpm, 3, 0.7, rng);
-  cv::Mat plant_mask = plant > 0.55f;
+  // Shrubs along the foot of the facade (below 1.4 m).
+  const cv::Rect foot(0, row_of(1.4), image.cols, image.rows - row_of(1.4));
+  cv::Mat plant = fractalNoise(foot.size(), 1.2 * tpm, 5, 0.6, rng);
+  for (int y = 0; y < foot.height; ++y) plant.row(y) += 0.6f * (static_cast<float>(y) / foot.height - 0.6f);
+  cv::Mat leaves = fractalNoise(foot.size(), 0.08 * tpm, 3, 0.7, rng);
   cv::Mat leaf_image;
-  leaves.convertTo(leaf_image, CV_8U, 90, 60);
-  leaf_image.copyTo(image, plant_mask);
+  leaves.convertTo(leaf_image, CV_8U, 90, 70);
+  leaf_image.copyTo(image(foot), plant > 0.35f);
   // Weathering: large-scale dirt plus fine grain.
   addNoise(image, 28, 3.0 * tpm, 4, rng);
   addNoise(image, 10, 0.05 * tpm, 2, rng);
