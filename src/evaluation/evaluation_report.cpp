@@ -11,8 +11,8 @@ namespace scale_drift_slam::evaluation {
 namespace {
 
 nlohmann::json statisticsJson(const ErrorStatistics& s) {
-  return {{"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
-          {"min", s.min},     {"max", s.max}};
+  return {{"count", s.count},   {"rmse", s.rmse}, {"mean", s.mean},
+          {"median", s.median}, {"min", s.min},   {"max", s.max}};
 }
 
 std::string format(const char* pattern, double a, double b = 0, double c = 0, double d = 0) {
@@ -60,7 +60,8 @@ nlohmann::json toJson(const TrajectoryEvaluation& e) {
 std::string summaryText(const TrajectoryEvaluation& e) {
   std::string text;
   text += "frames tracked      " + std::to_string(e.matched_frames) + " of " +
-          std::to_string(e.truth_frames) + format(" (%.1f %%), estimate has ", 100 * e.tracked_fraction) +
+          std::to_string(e.truth_frames) +
+          format(" (%.1f %%), estimate has ", 100 * e.tracked_fraction) +
           std::to_string(e.estimate_frames) + "\n";
   text += format("path length         %.3f m (ground truth)\n", e.truth_path_length);
   text += "alignment           " + alignmentModeName(e.alignment) +
@@ -75,7 +76,8 @@ std::string summaryText(const TrajectoryEvaluation& e) {
   }
   if (!e.scale_segments.empty()) {
     text += "scale per segment  ";
-    for (const ScaleSegment& s : e.scale_segments) text += format(" %.4f", s.scale);
+    for (const ScaleSegment& s : e.scale_segments)
+      text += format(" %.4f", s.scale);
     text += format("\nscale drift         %.4f (last segment / first)\n", e.scale_drift);
   }
   return text;
@@ -83,8 +85,8 @@ std::string summaryText(const TrajectoryEvaluation& e) {
 
 void saveEvaluationPlot(const std::string& path, const TrajectoryEvaluation& e) {
   io::PlotSeries truth{"ground truth", {}, io::plotColor(3), 2, false};
-  io::PlotSeries estimate{"estimate (" + alignmentModeName(e.alignment) + " aligned)", {},
-                          io::plotColor(0), 2, false};
+  io::PlotSeries estimate{
+      "estimate (" + alignmentModeName(e.alignment) + " aligned)", {}, io::plotColor(0), 2, false};
   for (size_t i = 0; i < e.truth_positions.size(); ++i) {
     truth.points.emplace_back(e.truth_positions[i].x(), e.truth_positions[i].y());
     estimate.points.emplace_back(e.aligned_positions[i].x(), e.aligned_positions[i].y());
@@ -97,7 +99,8 @@ void saveEvaluationPlot(const std::string& path, const TrajectoryEvaluation& e) 
   top.height = 700;
   io::PlotSeries error{"position error", {}, io::plotColor(1), 2, false};
   const double t0 = e.times.empty() ? 0.0 : e.times.front();
-  for (size_t i = 0; i < e.times.size(); ++i) error.points.emplace_back(e.times[i] - t0, e.ate_errors[i]);
+  for (size_t i = 0; i < e.times.size(); ++i)
+    error.points.emplace_back(e.times[i] - t0, e.ate_errors[i]);
   io::PlotOptions over_time;
   over_time.title = format("ATE rmse %.4f m", e.ate.rmse);
   over_time.x_label = "time [s]";

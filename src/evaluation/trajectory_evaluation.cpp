@@ -36,7 +36,8 @@ std::vector<RelativePoseError> relativeErrors(const std::vector<geometry::SE3>& 
     size_t j = 0;
     for (size_t i = 0; i < truth.size(); ++i) {
       j = std::max(j, i + 1);
-      while (j < truth.size() && length[j] - length[i] < distance) ++j;
+      while (j < truth.size() && length[j] - length[i] < distance)
+        ++j;
       if (j >= truth.size()) break;
       const geometry::SE3 delta_truth = truth[i].inverse() * truth[j];
       geometry::SE3 delta_estimate = estimate[i].inverse() * estimate[j];
@@ -66,7 +67,8 @@ std::vector<ScaleSegment> scaleSegments(const std::vector<Eigen::Vector3d>& trut
   size_t begin = 0;
   for (int k = 1; k <= count && begin < truth.size(); ++k) {
     size_t end = begin;
-    while (end < truth.size() && (k == count || length[end] < k * piece)) ++end;
+    while (end < truth.size() && (k == count || length[end] < k * piece))
+      ++end;
     if (end - begin >= 3) ranges.emplace_back(begin, end);
     begin = end;
   }
@@ -79,7 +81,8 @@ std::vector<ScaleSegment> scaleSegments(const std::vector<Eigen::Vector3d>& trut
   // Align the whole estimate on the first part, then measure each part's own scale.
   const geometry::Sim3 S_first = align(slice(estimate, ranges[0]), slice(truth, ranges[0]), mode);
   std::vector<Eigen::Vector3d> aligned;
-  for (const Eigen::Vector3d& p : estimate) aligned.push_back(S_first * p);
+  for (const Eigen::Vector3d& p : estimate)
+    aligned.push_back(S_first * p);
   for (const auto& range : ranges) {
     ScaleSegment segment;
     segment.start_distance = length[range.first];
@@ -89,7 +92,8 @@ std::vector<ScaleSegment> scaleSegments(const std::vector<Eigen::Vector3d>& trut
     segment.frames = range.second - range.first;
     const std::vector<Eigen::Vector3d> part = slice(aligned, range);
     double spread = 0.0;
-    for (const Eigen::Vector3d& p : part) spread = std::max(spread, (p - part.front()).norm());
+    for (const Eigen::Vector3d& p : part)
+      spread = std::max(spread, (p - part.front()).norm());
     if (spread < 1e-9 || segment.end_distance - segment.start_distance < 1e-9) continue;
     segment.scale = alignSim3(part, slice(truth, range)).scale();
     segments.push_back(segment);
@@ -130,17 +134,20 @@ std::vector<std::pair<size_t, size_t>> associateByTimestamp(
   std::vector<long> owner(truth.size(), -1);
   for (size_t e = 0; e < estimate.size(); ++e) {
     const double t = estimate[e].timestamp;
-    const auto it = std::lower_bound(truth.begin(), truth.end(), t,
-                                     [](const io::StampedPose& p, double s) { return p.timestamp < s; });
+    const auto it =
+        std::lower_bound(truth.begin(), truth.end(), t,
+                         [](const io::StampedPose& p, double s) { return p.timestamp < s; });
     size_t nearest = truth.size();
     double nearest_dt = max_time_difference + 1.0;
     for (auto candidate : {it, it == truth.begin() ? it : it - 1}) {
       if (candidate == truth.end()) continue;
       const double dt = std::abs(candidate->timestamp - t);
-      if (dt < nearest_dt) nearest_dt = dt, nearest = static_cast<size_t>(candidate - truth.begin());
+      if (dt < nearest_dt)
+        nearest_dt = dt, nearest = static_cast<size_t>(candidate - truth.begin());
     }
     if (nearest == truth.size() || nearest_dt > max_time_difference) continue;
-    if (nearest_dt < best[nearest]) best[nearest] = nearest_dt, owner[nearest] = static_cast<long>(e);
+    if (nearest_dt < best[nearest])
+      best[nearest] = nearest_dt, owner[nearest] = static_cast<long>(e);
   }
   for (size_t t = 0; t < truth.size(); ++t) {
     if (owner[t] >= 0) pairs.emplace_back(t, static_cast<size_t>(owner[t]));
@@ -154,7 +161,8 @@ ErrorStatistics errorStatistics(std::vector<double> errors) {
   if (errors.empty()) return s;
   std::sort(errors.begin(), errors.end());
   double sum = 0, sum_sq = 0;
-  for (const double e : errors) sum += e, sum_sq += e * e;
+  for (const double e : errors)
+    sum += e, sum_sq += e * e;
   s.mean = sum / errors.size();
   s.rmse = std::sqrt(sum_sq / errors.size());
   s.min = errors.front();
@@ -168,7 +176,9 @@ TrajectoryEvaluation evaluateTrajectory(std::vector<io::StampedPose> truth,
                                         std::vector<io::StampedPose> estimate,
                                         const EvaluationParams& params) {
   params.validate();
-  auto by_time = [](const io::StampedPose& a, const io::StampedPose& b) { return a.timestamp < b.timestamp; };
+  auto by_time = [](const io::StampedPose& a, const io::StampedPose& b) {
+    return a.timestamp < b.timestamp;
+  };
   std::stable_sort(truth.begin(), truth.end(), by_time);
   std::stable_sort(estimate.begin(), estimate.end(), by_time);
   TrajectoryEvaluation result;
@@ -177,10 +187,12 @@ TrajectoryEvaluation evaluateTrajectory(std::vector<io::StampedPose> truth,
   result.estimate_frames = estimate.size();
   const auto pairs = associateByTimestamp(truth, estimate, params.max_time_difference);
   if (pairs.size() < 3) {
-    throw std::runtime_error("only " + std::to_string(pairs.size()) + " of " +
-                             std::to_string(estimate.size()) + " estimated poses have a ground-truth "
-                             "pose within " + std::to_string(params.max_time_difference) +
-                             " s (" + std::to_string(truth.size()) + " ground-truth poses); at least 3 are needed");
+    throw std::runtime_error(
+        "only " + std::to_string(pairs.size()) + " of " + std::to_string(estimate.size()) +
+        " estimated poses have a ground-truth "
+        "pose within " +
+        std::to_string(params.max_time_difference) + " s (" + std::to_string(truth.size()) +
+        " ground-truth poses); at least 3 are needed");
   }
   result.matched_frames = pairs.size();
   result.tracked_fraction = truth.empty() ? 0.0 : static_cast<double>(pairs.size()) / truth.size();

@@ -7,12 +7,12 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
-#include <opencv2/imgproc.hpp>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_msgs/TFMessage.h>
+#include <opencv2/imgproc.hpp>
 
 #include "scale_drift_slam/ros/conversions.h"
 
@@ -120,11 +120,13 @@ std::vector<BagImage> readBagImages(const std::string& path, const std::string& 
   }
   std::vector<BagImage> images;
   std::map<std::int64_t, geometry::CameraCalibration> calibrations;
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{image_topic, camera_info_topic}));
+  rosbag::View view(bag,
+                    rosbag::TopicQuery(std::vector<std::string>{image_topic, camera_info_topic}));
   for (const rosbag::MessageInstance& m : view) {
     if (m.getTopic() == image_topic) {
       const sensor_msgs::Image::ConstPtr msg = m.instantiate<sensor_msgs::Image>();
-      if (!msg) throw std::runtime_error("topic " + image_topic + " does not hold sensor_msgs/Image");
+      if (!msg)
+        throw std::runtime_error("topic " + image_topic + " does not hold sensor_msgs/Image");
       BagImage image;
       image.stamp_ns = static_cast<std::int64_t>(msg->header.stamp.toNSec());
       image.timestamp = msg->header.stamp.toSec();
@@ -135,7 +137,8 @@ std::vector<BagImage> readBagImages(const std::string& path, const std::string& 
           ros_conversions::calibrationFromCameraInfo(*info);
     }
   }
-  if (images.empty()) throw std::runtime_error("bag '" + path + "' has no images on " + image_topic);
+  if (images.empty())
+    throw std::runtime_error("bag '" + path + "' has no images on " + image_topic);
   std::stable_sort(images.begin(), images.end(),
                    [](const BagImage& a, const BagImage& b) { return a.stamp_ns < b.stamp_ns; });
   for (BagImage& image : images) {
@@ -155,7 +158,8 @@ std::vector<io::StampedPose> readBagPoses(const std::string& path, const std::st
   std::vector<io::StampedPose> poses;
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topic))) {
     const auto msg = m.instantiate<geometry_msgs::PoseStamped>();
-    if (!msg) throw std::runtime_error("topic " + topic + " does not hold geometry_msgs/PoseStamped");
+    if (!msg)
+      throw std::runtime_error("topic " + topic + " does not hold geometry_msgs/PoseStamped");
     poses.push_back({msg->header.stamp.toSec(), ros_conversions::fromPoseMsg(msg->pose)});
   }
   return poses;

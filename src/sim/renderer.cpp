@@ -10,9 +10,9 @@
 namespace scale_drift_slam::sim {
 namespace {
 
-constexpr double kNear = 0.02;                ///< Near clipping distance (metres, along z).
-constexpr float kInsideTolerance = 1e-6f;     ///< Closes cracks between surfaces sharing an edge.
-constexpr double kMaxCurveDeviation = 0.25;   ///< Pixels; distorted edges are split until this.
+constexpr double kNear = 0.02;               ///< Near clipping distance (metres, along z).
+constexpr float kInsideTolerance = 1e-6f;    ///< Closes cracks between surfaces sharing an edge.
+constexpr double kMaxCurveDeviation = 0.25;  ///< Pixels; distorted edges are split until this.
 
 /// log2(x) for x > 0, to about 0.005 (enough to pick a mip level): exponent plus a quadratic in
 /// the mantissa m in [1, 2).
@@ -85,11 +85,14 @@ Renderer::Renderer(const geometry::CameraModel& camera)
     for (int x = 0; x < width_; ++x) {
       const Eigen::Vector3d& r = row_rays[static_cast<size_t>(x)];
       if (!(r.z() > 0.05)) {
-        throw std::invalid_argument("the renderer needs every pixel within 87 degrees of the "
-                                    "optical axis; this camera sees wider");
+        throw std::invalid_argument(
+            "the renderer needs every pixel within 87 degrees of the "
+            "optical axis; this camera sees wider");
       }
-      const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      for (int k = 0; k < 3; ++k) rays_[3 * i + static_cast<size_t>(k)] = static_cast<float>(r[k]);
+      const size_t i =
+          static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      for (int k = 0; k < 3; ++k)
+        rays_[3 * i + static_cast<size_t>(k)] = static_cast<float>(r[k]);
       const double alpha = std::max((row_rays[static_cast<size_t>(x) + 1] - r).norm(),
                                     (next_rays[static_cast<size_t>(x)] - r).norm());
       // The linear path uses r / r.z, whose length is 1 / r.z.
@@ -109,8 +112,10 @@ Renderer::Renderer(const geometry::CameraModel& camera)
   y_max_ += margin_y;
   depth_.create(height_, width_, CV_32F);
   const geometry::CameraCalibration& k = camera.calibration();
-  for (int x = 0; x < width_; ++x) column_x_.push_back(static_cast<float>((x - k.cx) / k.fx));
-  for (int y = 0; y < height_; ++y) row_y_.push_back(static_cast<float>((y - k.cy) / k.fy));
+  for (int x = 0; x < width_; ++x)
+    column_x_.push_back(static_cast<float>((x - k.cx) / k.fx));
+  for (int y = 0; y < height_; ++y)
+    row_y_.push_back(static_cast<float>((y - k.cy) / k.fy));
   index_.create(height_, width_, CV_32S);
   span_lo_.resize(static_cast<size_t>(height_));
   span_hi_.resize(static_cast<size_t>(height_));
@@ -129,7 +134,8 @@ cv::Mat Renderer::range() const {
 }
 
 Eigen::Vector3f Renderer::ray(int x, int y) const {
-  const size_t i = 3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x));
+  const size_t i =
+      3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x));
   return Eigen::Vector3f(rays_[i], rays_[i + 1], rays_[i + 2]);
 }
 
@@ -140,8 +146,8 @@ bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix
   if (s.shape == Surface::Shape::kParallelogram) polygon.push_back(o + e1 + e2);
   polygon.push_back(o + e2);
   // Quick rejection: every corner outside the same side of the viewing frustum.
-  const Eigen::Vector3d planes[5] = {{0, 0, 1}, {-1, 0, x_max_}, {1, 0, -x_min_}, {0, -1, y_max_},
-                                     {0, 1, -y_min_}};
+  const Eigen::Vector3d planes[5] = {
+      {0, 0, 1}, {-1, 0, x_max_}, {1, 0, -x_min_}, {0, -1, y_max_}, {0, 1, -y_min_}};
   for (const Eigen::Vector3d& plane : planes) {
     if (std::all_of(polygon.begin(), polygon.end(),
                     [&](const Eigen::Vector3d& p) { return plane.dot(p) < 0; })) {
@@ -150,7 +156,7 @@ bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix
   }
   const Eigen::Vector3d normal = e1.cross(e2).normalized();
   const double dn = normal.dot(o);
-  if (std::abs(dn) < 1e-9) return false;              // the camera lies in the plane
+  if (std::abs(dn) < 1e-9) return false;        // the camera lies in the plane
   if (!s.double_sided && dn < 0) return false;  // seen from the back (see Surface)
   for (const Eigen::Vector3d& plane : {planes[1], planes[2], planes[3], planes[4]}) {
     if (polygon.size() < 3) return false;
@@ -168,7 +174,8 @@ bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix
   if (near_clipped.size() < 3) return false;
   out.polygon = std::move(near_clipped);
   out.sort_key = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& p : out.polygon) out.sort_key = std::min(out.sort_key, p.norm());
+  for (const Eigen::Vector3d& p : out.polygon)
+    out.sort_key = std::min(out.sort_key, p.norm());
 
   // Dual basis of (e1, e2) in the plane: G = E (E^T E)^-1, so that b = G^T (X - o).
   Eigen::Matrix<double, 3, 2> E;
@@ -214,9 +221,9 @@ void Renderer::appendEdge(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
     if (projectPoint(m, pm)) {
       const Eigen::Vector2d chord = pb - pa;
       const double length = chord.norm();
-      const double deviation = length > 1e-9
-                                   ? std::abs(chord.x() * (pm - pa).y() - chord.y() * (pm - pa).x()) / length
-                                   : (pm - pa).norm();
+      const double deviation =
+          length > 1e-9 ? std::abs(chord.x() * (pm - pa).y() - chord.y() * (pm - pa).x()) / length
+                        : (pm - pa).norm();
       if (deviation > kMaxCurveDeviation || length > 0.5 * (width_ + height_)) {
         appendEdge(a, m, pa, pm, depth + 1, out);
         appendEdge(m, b, pm, pb, depth + 1, out);
@@ -226,7 +233,6 @@ void Renderer::appendEdge(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   }
   out.push_back(pa);
 }
-
 
 bool Renderer::computeSpans(const Prepared& surface, int& row_begin, int& row_end) {
   const Polygon& polygon = surface.polygon;
@@ -247,8 +253,10 @@ bool Renderer::computeSpans(const Prepared& surface, int& row_begin, int& row_en
   row_begin = std::max(0, static_cast<int>(std::floor(y_lo)) - 1);
   row_end = std::min(height_, static_cast<int>(std::ceil(y_hi)) + 2);
   if (row_begin >= row_end) return true;
-  std::fill(span_lo_.begin() + row_begin, span_lo_.begin() + row_end, std::numeric_limits<float>::infinity());
-  std::fill(span_hi_.begin() + row_begin, span_hi_.begin() + row_end, -std::numeric_limits<float>::infinity());
+  std::fill(span_lo_.begin() + row_begin, span_lo_.begin() + row_end,
+            std::numeric_limits<float>::infinity());
+  std::fill(span_hi_.begin() + row_begin, span_hi_.begin() + row_end,
+            -std::numeric_limits<float>::infinity());
   // Each boundary segment widens the span of every row within one pixel of it (conservative; the
   // per-pixel inside test decides exactly).
   for (size_t i = 0; i < boundary_.size(); ++i) {
@@ -350,7 +358,8 @@ void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::
   // Front to back: nearer surfaces fill the z-buffer first, hidden pixels are then not shaded.
   std::sort(visible.begin(), visible.end(),
             [](const Prepared& a, const Prepared& b) { return a.sort_key < b.sort_key; });
-  for (const Prepared& prepared : visible) rasterise(prepared, scene, image);
+  for (const Prepared& prepared : visible)
+    rasterise(prepared, scene, image);
 
   // Background: by the elevation of the ray in the world, (R^T r).z = R.col(2).r.
   const Eigen::Vector3f up = R.col(2).cast<float>();
@@ -360,7 +369,8 @@ void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::
     std::uint8_t* out = image.ptr<std::uint8_t>(y);
     for (int x = 0; x < width_; ++x) {
       if (index[x] >= 0) continue;
-      const float* r = &rays_[3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x))];
+      const float* r = &rays_[3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) +
+                                   static_cast<size_t>(x))];
       const float level = background.level(up.x() * r[0] + up.y() * r[1] + up.z() * r[2]);
       out[x] = static_cast<std::uint8_t>(std::clamp(level + 0.5f, 0.0f, 255.0f));
     }
@@ -379,7 +389,8 @@ void Renderer::renderColor(const Scene& scene, const geometry::SE3& T_cam_world,
     for (int x = 0; x < width_; ++x) {
       const Eigen::Vector3f& tint =
           index[x] >= 0 ? surfaces[static_cast<size_t>(index[x])].tint : scene.background().tint;
-      for (int c = 0; c < 3; ++c) out[x][c] = cv::saturate_cast<std::uint8_t>(in[x] * tint[c]);
+      for (int c = 0; c < 3; ++c)
+        out[x][c] = cv::saturate_cast<std::uint8_t>(in[x] * tint[c]);
     }
   }
 }

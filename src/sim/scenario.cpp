@@ -17,7 +17,8 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed) {
   if (name == "corridor_straight") return detail::makeCorridorStraight(seed);
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
   std::string known;
-  for (const std::string& n : scenarioNames()) known += (known.empty() ? "" : ", ") + n;
+  for (const std::string& n : scenarioNames())
+    known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown scene '" + name + "' (known: " + known + ")");
 }
 
@@ -64,7 +65,8 @@ Wobble::Wobble(cv::RNG& rng, double amplitude, double frequency) {
 
 double Wobble::operator()(double t) const {
   double sum = 0.0;
-  for (int k = 0; k < 3; ++k) sum += amplitude_[k] * std::sin(2.0 * M_PI * frequency_[k] * t + phase_[k]);
+  for (int k = 0; k < 3; ++k)
+    sum += amplitude_[k] * std::sin(2.0 * M_PI * frequency_[k] * t + phase_[k]);
   return sum;
 }
 

@@ -7,8 +7,8 @@
 
 #include <cmath>
 
-#include "scenario_builders.h"
 #include "scale_drift_slam/sim/texture_generator.h"
+#include "scenario_builders.h"
 
 namespace scale_drift_slam::sim::detail {
 
@@ -30,15 +30,17 @@ Scenario makeCorridorStraight(std::uint32_t seed) {
                   Eigen::Vector3d(0, 0, -height),
                   textures::interiorWall(section, height, tpm, base + 2 * k, true), 0.92f);
     // Right wall (y = -half_width): its right points along -x.
-    scene.addQuad(Eigen::Vector3d(x + section, -half_width, height), Eigen::Vector3d(-section, 0, 0),
-                  Eigen::Vector3d(0, 0, -height),
+    scene.addQuad(Eigen::Vector3d(x + section, -half_width, height),
+                  Eigen::Vector3d(-section, 0, 0), Eigen::Vector3d(0, 0, -height),
                   textures::interiorWall(section, height, tpm, base + 2 * k + 1, k % 2 == 1), 0.8f);
     scene.addQuad(Eigen::Vector3d(x, half_width, 0), Eigen::Vector3d(section, 0, 0),
                   Eigen::Vector3d(0, -2 * half_width, 0),
-                  textures::floorMaterial("tiles", section, 2 * half_width, 100, base + 1000 + k), 0.85f);
+                  textures::floorMaterial("tiles", section, 2 * half_width, 100, base + 1000 + k),
+                  0.85f);
     scene.addQuad(Eigen::Vector3d(x, -half_width, height), Eigen::Vector3d(section, 0, 0),
                   Eigen::Vector3d(0, 2 * half_width, 0),
-                  textures::floorMaterial("ceiling", section, 2 * half_width, 80, base + 2000 + k), 1.0f);
+                  textures::floorMaterial("ceiling", section, 2 * half_width, 80, base + 2000 + k),
+                  1.0f);
   }
   cv::RNG rng(seed + 3000);
   for (int end = 0; end < 2; ++end) {
@@ -53,7 +55,8 @@ Scenario makeCorridorStraight(std::uint32_t seed) {
                   wall, 0.9f);
   }
 
-  const Wobble sway(rng, 0.06, 0.3), bob(rng, 0.02, 1.8), yaw(rng, 0.05, 0.15), pitch(rng, 0.03, 0.2);
+  const Wobble sway(rng, 0.06, 0.3), bob(rng, 0.02, 1.8), yaw(rng, 0.05, 0.15),
+      pitch(rng, 0.03, 0.2);
   const Wobble roll(rng, 0.02, 0.3);
   scenario.T_world_cam = [=](double t) {
     const Eigen::Vector3d position(1.4 * t, 0.15 + sway(t), 1.5 + bob(t));

@@ -9,8 +9,8 @@
 
 #include <cmath>
 
-#include "scenario_builders.h"
 #include "scale_drift_slam/sim/texture_generator.h"
+#include "scenario_builders.h"
 
 namespace scale_drift_slam::sim::detail {
 namespace {
@@ -60,29 +60,29 @@ Scenario makeCourtyardLoop(std::uint32_t seed) {
   Scene& scene = scenario.scene;
   const double tpm = 120.0;  // texels per metre on the facades (camera 3-7 m away)
   // Facades: south, east, north, west; each seen from inside the courtyard.
-  const Eigen::Vector3d corners[4] = {{-kHalfCourt, -kHalfCourt, 0}, {kHalfCourt, -kHalfCourt, 0},
-                                      {kHalfCourt, kHalfCourt, 0}, {-kHalfCourt, kHalfCourt, 0}};
+  const Eigen::Vector3d corners[4] = {{-kHalfCourt, -kHalfCourt, 0},
+                                      {kHalfCourt, -kHalfCourt, 0},
+                                      {kHalfCourt, kHalfCourt, 0},
+                                      {-kHalfCourt, kHalfCourt, 0}};
   const float gains[4] = {1.0f, 0.82f, 0.66f, 0.9f};
   // B, G, R: brick red, sandstone, grey-blue, warm white.
-  const Eigen::Vector3f tints[4] = {{0.65f, 0.9f, 1.45f}, {0.7f, 1.0f, 1.25f}, {1.2f, 1.0f, 0.9f},
-                                    {0.9f, 1.0f, 1.08f}};
+  const Eigen::Vector3f tints[4] = {
+      {0.65f, 0.9f, 1.45f}, {0.7f, 1.0f, 1.25f}, {1.2f, 1.0f, 0.9f}, {0.9f, 1.0f, 1.08f}};
   cv::RNG rng(seed);
   for (int k = 0; k < 4; ++k) {
     const double height = rng.uniform(10.0, 13.0);
     // Seen from inside the courtyard the facade's left end is the next corner (clockwise).
     const Eigen::Vector3d right = corners[k] - corners[(k + 1) % 4];
-    const int index = scene.addQuad(corners[(k + 1) % 4] + Eigen::Vector3d(0, 0, height), right,
-                                    Eigen::Vector3d(0, 0, -height),
-                                    textures::facade(right.norm(), height, tpm, seed * 16 + k),
-                                    gains[k]);
+    const int index = scene.addQuad(
+        corners[(k + 1) % 4] + Eigen::Vector3d(0, 0, height), right, Eigen::Vector3d(0, 0, -height),
+        textures::facade(right.norm(), height, tpm, seed * 16 + k), gains[k]);
     scene.surface(index).tint = tints[k];
   }
   // The ground: viewed from above, rows along -y.
-  const int ground = scene.addQuad(Eigen::Vector3d(-kHalfCourt, kHalfCourt, 0),
-                                   Eigen::Vector3d(2 * kHalfCourt, 0, 0),
-                                   Eigen::Vector3d(0, -2 * kHalfCourt, 0),
-                                   textures::pavedGround(2 * kHalfCourt, 2 * kHalfCourt, 60.0, seed * 16 + 7),
-                                   0.95f);
+  const int ground = scene.addQuad(
+      Eigen::Vector3d(-kHalfCourt, kHalfCourt, 0), Eigen::Vector3d(2 * kHalfCourt, 0, 0),
+      Eigen::Vector3d(0, -2 * kHalfCourt, 0),
+      textures::pavedGround(2 * kHalfCourt, 2 * kHalfCourt, 60.0, seed * 16 + 7), 0.95f);
   scene.surface(ground).tint = Eigen::Vector3f(0.95f, 1.0f, 1.0f);
 
   // The walk: arc length with a step rhythm, height bob, and small head rotations.
@@ -92,7 +92,8 @@ Scenario makeCourtyardLoop(std::uint32_t seed) {
   const Wobble yaw(rng, 0.035, 0.25), pitch(rng, 0.03, 0.3), roll(rng, 0.02, 0.35);
   const Wobble sway(rng, 0.03, 0.4);
   scenario.T_world_cam = [=](double t) {
-    const double s = speed * t - speed * 0.08 / (2 * M_PI * step_hz) * std::sin(2 * M_PI * step_hz * t);
+    const double s =
+        speed * t - speed * 0.08 / (2 * M_PI * step_hz) * std::sin(2 * M_PI * step_hz * t);
     Eigen::Vector2d p, d;
     roundedSquare(s, p, d);
     const Eigen::Vector2d outward(d.y(), -d.x());  // right of the walking direction

@@ -8,8 +8,8 @@
 
 #include <cmath>
 
-#include "scenario_builders.h"
 #include "scale_drift_slam/sim/texture_generator.h"
+#include "scenario_builders.h"
 
 namespace scale_drift_slam::sim::detail {
 namespace {
@@ -39,7 +39,8 @@ Eigen::Vector3d orbit(double theta) {
 Scenario makeSphereFlyover(std::uint32_t seed) {
   Scenario scenario;
   scenario.name = "sphere_flyover";
-  scenario.description = "downward camera on a precessing orbit, three loops over a textured sphere";
+  scenario.description =
+      "downward camera on a precessing orbit, three loops over a textured sphere";
   const double omega = kSpeed / (kRadius + kAltitude);
   scenario.duration = kRevolutions * 2.0 * M_PI / omega;
   scenario.rate = 30.0;
@@ -61,9 +62,12 @@ Scenario makeSphereFlyover(std::uint32_t seed) {
       const Eigen::Vector3d p01 = spherePoint(lon0, lat1), p11 = spherePoint(lon1, lat1);
       // Seen from outside, east (+longitude) is to the right and south (down the texture) is
       // downwards, so (east, south) edges keep the texture unmirrored (Surface::double_sided).
-      if (j > 0) scene.surface(scene.addTriangle(p00, p10, p01, t00, t10, t01, texture)).double_sided = false;
+      if (j > 0)
+        scene.surface(scene.addTriangle(p00, p10, p01, t00, t10, t01, texture)).double_sided =
+            false;
       if (j < rows - 1) {
-        scene.surface(scene.addTriangle(p11, p01, p10, t11, t01, t10, texture)).double_sided = false;
+        scene.surface(scene.addTriangle(p11, p01, p10, t11, t01, t10, texture)).double_sided =
+            false;
       }
     }
   }

@@ -58,7 +58,7 @@ geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
     if (params.horizontal_fov_deg == 0) fov = 120.0;
     c.model = geometry::DistortionModel::kEquidistant;
     c.fx = c.fy = (params.width / 2.0) / (0.5 * fov * M_PI / 180.0);  // r = f theta
-    c.distortion = {0.0034823, 0.000715, -0.0020532, 0.0002029};    // TUM-VI-like
+    c.distortion = {0.0034823, 0.000715, -0.0020532, 0.0002029};      // TUM-VI-like
   } else {
     c.model = geometry::DistortionModel::kRadialTangential;
     c.fx = c.fy = (params.width / 2.0) / std::tan(0.5 * fov * M_PI / 180.0);
@@ -130,8 +130,8 @@ RenderedFrame SequenceRenderer::render(int index) {
   if (realism.optics_blur > 0) {
     cv::GaussianBlur(frame.image, frame.image, cv::Size(0, 0), realism.optics_blur);
   }
-  const double gain =
-      1.0 + realism.exposure_amplitude * std::sin(2 * M_PI * t / realism.exposure_period + exposure_phase_);
+  const double gain = 1.0 + realism.exposure_amplitude *
+                                std::sin(2 * M_PI * t / realism.exposure_period + exposure_phase_);
   if (realism.noise_sigma > 0 || gain != 1.0) {
     cv::Mat as_float;
     frame.image.convertTo(as_float, CV_32F, gain);

@@ -17,9 +17,10 @@ cv::Mat fractalNoise(cv::Size size, double largest_period, int octaves, double p
     cv::Mat grid(rows, cols, CV_32F);
     rng.fill(grid, cv::RNG::UNIFORM, -1.0, 1.0);
     cv::Mat layer;
-    cv::resize(grid, layer, cv::Size(static_cast<int>((cols - 1) * period),
-                                     static_cast<int>((rows - 1) * period)),
-               0, 0, cv::INTER_CUBIC);
+    cv::resize(
+        grid, layer,
+        cv::Size(static_cast<int>((cols - 1) * period), static_cast<int>((rows - 1) * period)), 0,
+        0, cv::INTER_CUBIC);
     sum += amplitude * layer(cv::Rect(0, 0, size.width, size.height));
     total += amplitude;
     amplitude *= persistence;
@@ -38,8 +39,8 @@ void addNoise(cv::Mat& image, double amplitude, double largest_period, int octav
 }
 
 std::string randomWord(cv::RNG& rng, int min_syllables, int max_syllables) {
-  static const char* kOnsets[] = {"b", "c",  "d",  "f", "g",  "h",  "k",  "l",  "m",  "n",  "p",
-                                  "r", "s",  "t",  "v", "w",  "z",  "br", "cl", "dr", "gr", "pl",
+  static const char* kOnsets[] = {"b",  "c",  "d",  "f",  "g",  "h",  "k",  "l",  "m",  "n",  "p",
+                                  "r",  "s",  "t",  "v",  "w",  "z",  "br", "cl", "dr", "gr", "pl",
                                   "st", "tr", "sh", "ch", "th", "qu", "sk", "fl", "bl", "cr"};
   static const char* kVowels[] = {"a", "e", "i", "o", "u", "ai", "ea", "ou", "io", "y"};
   static const char* kCodas[] = {"", "", "", "n", "r", "s", "l", "t", "m", "x", "nd", "rk"};
@@ -85,14 +86,16 @@ void drawRandomShape(cv::Mat& image, cv::RNG& rng) {
     case 2: {
       std::vector<cv::Point> triangle;
       for (int k = 0; k < 3; ++k) {
-        triangle.emplace_back(centre.x + rng.uniform(-size, size), centre.y + rng.uniform(-size, size));
+        triangle.emplace_back(centre.x + rng.uniform(-size, size),
+                              centre.y + rng.uniform(-size, size));
       }
       cv::fillConvexPoly(image, triangle, grey, cv::LINE_AA);
       break;
     }
     case 3:
-      cv::line(image, centre, centre + cv::Point(rng.uniform(-size, size), rng.uniform(-size, size)),
-               grey, std::max(1, size / 12), cv::LINE_AA);
+      cv::line(image, centre,
+               centre + cv::Point(rng.uniform(-size, size), rng.uniform(-size, size)), grey,
+               std::max(1, size / 12), cv::LINE_AA);
       break;
     default:
       cv::ellipse(image, centre, cv::Size(size / 2, std::max(1, size / 4)), rng.uniform(0, 180), 0,
@@ -107,9 +110,11 @@ cv::Mat poster(cv::Size size, cv::RNG& rng) {
   cv::Mat image(size, CV_8U);
   // Background: a gradient between two random greys.
   const double a = rng.uniform(30, 230), b = rng.uniform(30, 230);
-  for (int y = 0; y < h; ++y) image.row(y).setTo(cv::Scalar(a + (b - a) * y / std::max(1, h - 1)));
+  for (int y = 0; y < h; ++y)
+    image.row(y).setTo(cv::Scalar(a + (b - a) * y / std::max(1, h - 1)));
   const int shapes = rng.uniform(4, 14);
-  for (int i = 0; i < shapes; ++i) drawRandomShape(image, rng);
+  for (int i = 0; i < shapes; ++i)
+    drawRandomShape(image, rng);
   // A "photograph": a high-contrast noise patch in a frame.
   if (rng.uniform(0, 2) == 0 && w > 16 && h > 16) {
     const cv::Rect photo(rng.uniform(0, w / 3), rng.uniform(h / 4, h / 2), w / 2, h / 3);
@@ -124,8 +129,8 @@ cv::Mat poster(cv::Size size, cv::RNG& rng) {
     const int line_h = std::max(3, h / 24);
     const int y = h * 2 / 3 + i * line_h * 3 / 2;
     if (y + line_h > h - 2) break;
-    drawTextInBox(image, randomWord(rng, 1, 2) + " " + randomWord(rng, 1, 3) + " " +
-                             randomWord(rng, 1, 2),
+    drawTextInBox(image,
+                  randomWord(rng, 1, 2) + " " + randomWord(rng, 1, 3) + " " + randomWord(rng, 1, 2),
                   cv::Rect(w / 10, y, w * 4 / 5, line_h), ink, cv::FONT_HERSHEY_SIMPLEX, 1);
   }
   cv::rectangle(image, cv::Rect(0, 0, w, h), cv::Scalar(rng.uniform(0, 80)), std::max(1, w / 80));

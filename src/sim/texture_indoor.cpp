@@ -22,13 +22,14 @@ void whiteboard(cv::Mat& image, const cv::Rect& box, cv::RNG& rng) {
     const cv::Rect line(box.x + rng.uniform(box.width / 20, box.width / 2),
                         box.y + rng.uniform(box.height / 10, box.height * 4 / 5),
                         rng.uniform(box.width / 6, box.width / 2), box.height / 12);
-    drawTextInBox(image, randomWord(rng, 1, 3) + " = " + randomWord(rng, 1, 2),
-                  line & box, rng.uniform(20, 90), cv::FONT_HERSHEY_SCRIPT_SIMPLEX, 1);
+    drawTextInBox(image, randomWord(rng, 1, 3) + " = " + randomWord(rng, 1, 2), line & box,
+                  rng.uniform(20, 90), cv::FONT_HERSHEY_SCRIPT_SIMPLEX, 1);
   }
   std::vector<cv::Point> curve;
   for (int i = 0; i < 30; ++i) {
-    curve.emplace_back(box.x + box.width / 10 + i * box.width / 40,
-                       box.y + box.height / 2 + static_cast<int>(box.height / 5 * std::sin(i * 0.4)));
+    curve.emplace_back(
+        box.x + box.width / 10 + i * box.width / 40,
+        box.y + box.height / 2 + static_cast<int>(box.height / 5 * std::sin(i * 0.4)));
   }
   cv::polylines(image, curve, false, cv::Scalar(40), 2, cv::LINE_AA);
 }
@@ -38,7 +39,8 @@ void bookshelf(cv::Mat& image, const cv::Rect& box, cv::RNG& rng) {
   const int shelves = 5, shelf_h = box.height / shelves;
   for (int s = 0; s < shelves; ++s) {
     const int y = box.y + s * shelf_h;
-    cv::rectangle(image, cv::Rect(box.x, y, box.width, shelf_h / 10 + 1), cv::Scalar(150), cv::FILLED);
+    cv::rectangle(image, cv::Rect(box.x, y, box.width, shelf_h / 10 + 1), cv::Scalar(150),
+                  cv::FILLED);
     for (int x = box.x + 2; x < box.br().x - 4;) {
       const int w = rng.uniform(std::max(2, box.width / 60), std::max(3, box.width / 18));
       const int h = rng.uniform(shelf_h * 5 / 10, shelf_h * 9 / 10);
@@ -70,14 +72,15 @@ cv::Mat interiorWall(double width_m, double height_m, double texels_per_metre, s
                 cv::Scalar(rng.uniform(170, 225)));
   addNoise(image, 10, 1.0 * tpm, 4, rng);  // paint: weakly textured
   // Skirting board.
-  cv::rectangle(image, metres(0, height_m - 0.1, width_m, 0.1, tpm), cv::Scalar(rng.uniform(60, 120)), cv::FILLED);
+  cv::rectangle(image, metres(0, height_m - 0.1, width_m, 0.1, tpm),
+                cv::Scalar(rng.uniform(60, 120)), cv::FILLED);
   double x = rng.uniform(0.2, 0.8);
   if (with_door) {
     const cv::Rect door = metres(x, height_m - 2.05, 0.9, 2.05, tpm);
     cv::Mat wood = fractalNoise(door.size(), door.width / 5.0, 4, 0.5, rng);
     wood.convertTo(image(door), CV_8U, 30, rng.uniform(80, 150));
-    cv::circle(image, {door.br().x - door.width / 8, door.y + door.height / 2}, std::max(2, door.width / 25),
-               cv::Scalar(230), cv::FILLED, cv::LINE_AA);
+    cv::circle(image, {door.br().x - door.width / 8, door.y + door.height / 2},
+               std::max(2, door.width / 25), cv::Scalar(230), cv::FILLED, cv::LINE_AA);
     cv::rectangle(image, door, cv::Scalar(60), std::max(2, door.width / 30));
     x += 1.3;
   }
@@ -119,11 +122,13 @@ cv::Mat floorMaterial(const std::string& kind, double width_m, double depth_m,
     for (double y = 0; y < image.rows; y += plank_w) {
       for (double x = -rng.uniform(0.0, 1.2) * tpm; x < image.cols;) {
         const double len = rng.uniform(0.8, 1.6) * tpm;
-        cv::rectangle(image, cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(len),
-                                      static_cast<int>(plank_w)),
+        cv::rectangle(image,
+                      cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(len),
+                               static_cast<int>(plank_w)),
                       cv::Scalar(rng.uniform(90, 170)), cv::FILLED);
-        cv::rectangle(image, cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(len),
-                                      static_cast<int>(plank_w)),
+        cv::rectangle(image,
+                      cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(len),
+                               static_cast<int>(plank_w)),
                       cv::Scalar(50), 1);
         x += len;
       }
@@ -140,15 +145,18 @@ cv::Mat floorMaterial(const std::string& kind, double width_m, double depth_m,
     for (double y = 0; y < image.rows; y += tile) {
       for (double x = 0; x < image.cols; x += tile) {
         const int level = kind == "tiles" ? rng.uniform(80, 200) : rng.uniform(205, 225);
-        cv::rectangle(image, cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(tile),
-                                      static_cast<int>(tile)),
+        cv::rectangle(image,
+                      cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(tile),
+                               static_cast<int>(tile)),
                       cv::Scalar(level), cv::FILLED);
-        cv::rectangle(image, cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(tile),
-                                      static_cast<int>(tile)),
+        cv::rectangle(image,
+                      cv::Rect(static_cast<int>(x), static_cast<int>(y), static_cast<int>(tile),
+                               static_cast<int>(tile)),
                       cv::Scalar(kind == "tiles" ? 60 : 150), 2);
         if (kind == "ceiling" && rng.uniform(0, 7) == 0) {  // a light
-          cv::rectangle(image, cv::Rect(static_cast<int>(x + tile / 8), static_cast<int>(y + tile / 8),
-                                        static_cast<int>(tile * 3 / 4), static_cast<int>(tile * 3 / 4)),
+          cv::rectangle(image,
+                        cv::Rect(static_cast<int>(x + tile / 8), static_cast<int>(y + tile / 8),
+                                 static_cast<int>(tile * 3 / 4), static_cast<int>(tile * 3 / 4)),
                         cv::Scalar(252), cv::FILLED);
         }
       }
@@ -160,11 +168,12 @@ cv::Mat floorMaterial(const std::string& kind, double width_m, double depth_m,
   return image;
 }
 
-cv::Mat furniture(const std::string& kind, double width_m, double height_m,
-                  double texels_per_metre, std::uint32_t seed) {
+cv::Mat furniture(const std::string& kind, double width_m, double height_m, double texels_per_metre,
+                  std::uint32_t seed) {
   cv::RNG rng(0xfa00000ULL + seed);
   const double tpm = texels_per_metre;
-  const cv::Size size(std::max(4, static_cast<int>(width_m * tpm)), std::max(4, static_cast<int>(height_m * tpm)));
+  const cv::Size size(std::max(4, static_cast<int>(width_m * tpm)),
+                      std::max(4, static_cast<int>(height_m * tpm)));
   cv::Mat image(size, CV_8U, cv::Scalar(rng.uniform(90, 170)));
   if (kind == "desk") {
     addNoise(image, 25, 0.3 * tpm, 4, rng);
@@ -172,15 +181,18 @@ cv::Mat furniture(const std::string& kind, double width_m, double height_m,
       const cv::Size paper(static_cast<int>(0.21 * tpm), static_cast<int>(0.297 * tpm));
       const cv::Point at(rng.uniform(0, std::max(1, size.width - paper.width)),
                          rng.uniform(0, std::max(1, size.height - paper.height)));
-      poster(paper, rng).copyTo(image(cv::Rect(at, paper) & cv::Rect(0, 0, size.width, size.height)));
+      poster(paper, rng)
+          .copyTo(image(cv::Rect(at, paper) & cv::Rect(0, 0, size.width, size.height)));
     }
     const cv::Rect keyboard = metres(width_m / 2 - 0.22, height_m * 0.55, 0.44, 0.15, tpm) &
                               cv::Rect(0, 0, size.width, size.height);
     image(keyboard).setTo(cv::Scalar(40));
     for (int r = 0; r < 5; ++r) {
       for (int c = 0; c < 15; ++c) {  // repetitive keys
-        cv::rectangle(image, cv::Rect(keyboard.x + 2 + c * keyboard.width / 15, keyboard.y + 2 + r * keyboard.height / 5,
-                                      keyboard.width / 15 - 3, keyboard.height / 5 - 3),
+        cv::rectangle(image,
+                      cv::Rect(keyboard.x + 2 + c * keyboard.width / 15,
+                               keyboard.y + 2 + r * keyboard.height / 5, keyboard.width / 15 - 3,
+                               keyboard.height / 5 - 3),
                       cv::Scalar(rng.uniform(150, 200)), cv::FILLED);
       }
     }
@@ -190,20 +202,25 @@ cv::Mat furniture(const std::string& kind, double width_m, double height_m,
     for (int d = 0; d < doors; ++d) {
       const cv::Rect door(d * size.width / doors + 3, 3, size.width / doors - 6, size.height - 6);
       cv::rectangle(image, door, cv::Scalar(50), 2);
-      cv::rectangle(image, cv::Rect(door.x + door.width / 2 - 2, door.y + door.height / 8, std::max(4, door.width / 3), 5),
+      cv::rectangle(image,
+                    cv::Rect(door.x + door.width / 2 - 2, door.y + door.height / 8,
+                             std::max(4, door.width / 3), 5),
                     cv::Scalar(230), cv::FILLED);
     }
-    drawTextInBox(image, randomWord(rng, 1, 2), cv::Rect(size.width / 4, size.height / 2, size.width / 2, size.height / 10),
-                  20, cv::FONT_HERSHEY_SIMPLEX, 1);
+    drawTextInBox(image, randomWord(rng, 1, 2),
+                  cv::Rect(size.width / 4, size.height / 2, size.width / 2, size.height / 10), 20,
+                  cv::FONT_HERSHEY_SIMPLEX, 1);
   } else if (kind == "books") {
     bookshelf(image, cv::Rect(0, 0, size.width, size.height), rng);
   } else if (kind == "screen") {
     image.setTo(cv::Scalar(25));
-    const cv::Rect display(size.width / 20, size.height / 20, size.width * 9 / 10, size.height * 9 / 10);
+    const cv::Rect display(size.width / 20, size.height / 20, size.width * 9 / 10,
+                           size.height * 9 / 10);
     image(display).setTo(cv::Scalar(rng.uniform(40, 90)));
     for (int k = rng.uniform(2, 4); k > 0; --k) {
-      const cv::Rect window(display.x + rng.uniform(0, display.width / 2), display.y + rng.uniform(0, display.height / 2),
-                            display.width / 2, display.height / 2);
+      const cv::Rect window(display.x + rng.uniform(0, display.width / 2),
+                            display.y + rng.uniform(0, display.height / 2), display.width / 2,
+                            display.height / 2);
       const cv::Rect clipped = window & display;
       poster(clipped.size(), rng).copyTo(image(clipped));
     }

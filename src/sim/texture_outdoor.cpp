@@ -34,8 +34,9 @@ void drawStones(cv::Mat& image, double texels_per_metre, cv::RNG& rng) {
   for (double y = 0; y < image.rows; y += course_h) {
     for (double x = -rng.uniform(0.0, 1.0) * texels_per_metre; x < image.cols;) {
       const double w = rng.uniform(0.5, 1.3) * texels_per_metre;
-      cv::rectangle(image, cv::Rect(static_cast<int>(x + 2), static_cast<int>(y + 2),
-                                    static_cast<int>(w - 4), static_cast<int>(course_h - 4)),
+      cv::rectangle(image,
+                    cv::Rect(static_cast<int>(x + 2), static_cast<int>(y + 2),
+                             static_cast<int>(w - 4), static_cast<int>(course_h - 4)),
                     cv::Scalar(base + rng.gaussian(14)), cv::FILLED);
       x += w;
     }
@@ -64,10 +65,14 @@ void drawWindow(cv::Mat& image, const cv::Rect& box, int style, cv::RNG& rng) {
     }
   } else if (content == 1) {  // curtains
     const int cw = inner.width / 4;
-    cv::rectangle(image, cv::Rect(inner.x, inner.y, cw, inner.height), cv::Scalar(rng.uniform(150, 240)), cv::FILLED);
-    cv::rectangle(image, cv::Rect(inner.br().x - cw, inner.y, cw, inner.height), cv::Scalar(rng.uniform(150, 240)), cv::FILLED);
+    cv::rectangle(image, cv::Rect(inner.x, inner.y, cw, inner.height),
+                  cv::Scalar(rng.uniform(150, 240)), cv::FILLED);
+    cv::rectangle(image, cv::Rect(inner.br().x - cw, inner.y, cw, inner.height),
+                  cv::Scalar(rng.uniform(150, 240)), cv::FILLED);
   } else if (content == 2) {  // a plant or an object on the sill
-    cv::circle(image, {inner.x + rng.uniform(inner.width / 4, inner.width * 3 / 4), inner.br().y - inner.height / 6},
+    cv::circle(image,
+               {inner.x + rng.uniform(inner.width / 4, inner.width * 3 / 4),
+                inner.br().y - inner.height / 6},
                inner.width / 6, cv::Scalar(rng.uniform(20, 90)), cv::FILLED, cv::LINE_AA);
   }
   // Mullions (2x2, 2x3, 1x2 panes).
@@ -88,10 +93,12 @@ void drawWindow(cv::Mat& image, const cv::Rect& box, int style, cv::RNG& rng) {
 /// A wooden door with panels and a handle.
 void drawDoor(cv::Mat& image, const cv::Rect& box, cv::RNG& rng) {
   cv::Mat wood = fractalNoise(box.size(), box.width / 6.0, 4, 0.55, rng);
-  wood.convertTo(image(box & cv::Rect(0, 0, image.cols, image.rows)), CV_8U, 25, rng.uniform(50, 150));
+  wood.convertTo(image(box & cv::Rect(0, 0, image.cols, image.rows)), CV_8U, 25,
+                 rng.uniform(50, 150));
   const int m = box.width / 8;
   for (int k = 0; k < 2; ++k) {
-    const cv::Rect panel(box.x + m, box.y + m + k * box.height / 2, box.width - 2 * m, box.height / 2 - 2 * m);
+    const cv::Rect panel(box.x + m, box.y + m + k * box.height / 2, box.width - 2 * m,
+                         box.height / 2 - 2 * m);
     cv::rectangle(image, panel, cv::Scalar(rng.uniform(20, 90)), std::max(1, m / 3));
   }
   cv::circle(image, {box.x + box.width - 2 * m, box.y + box.height / 2}, std::max(2, m / 2),
@@ -122,7 +129,8 @@ cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::ui
   const double margin = (width_m - columns * spacing) / 2 + spacing / 2;
   auto row_of = [&](double z) { return static_cast<int>((height_m - z) * tpm); };
   for (double floor_z = ground_floor; floor_z + 2.2 < height_m; floor_z += storey) {
-    cv::rectangle(image, cv::Rect(0, row_of(floor_z + 0.25), image.cols, static_cast<int>(0.25 * tpm)),
+    cv::rectangle(image,
+                  cv::Rect(0, row_of(floor_z + 0.25), image.cols, static_cast<int>(0.25 * tpm)),
                   cv::Scalar(rng.uniform(170, 235)), cv::FILLED);
     for (int c = 0; c < columns; ++c) {
       if (rng.uniform(0, 9) == 0) continue;  // a missing window
@@ -140,52 +148,68 @@ cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::ui
     const int px = static_cast<int>(x * tpm);
     double used = 0.0;
     if (kind == 0) {
-      drawDoor(image, cv::Rect(px, row_of(2.15), static_cast<int>(1.1 * tpm), static_cast<int>(2.15 * tpm)), rng);
+      drawDoor(
+          image,
+          cv::Rect(px, row_of(2.15), static_cast<int>(1.1 * tpm), static_cast<int>(2.15 * tpm)),
+          rng);
       used = 1.1;
     } else if (kind == 1 || kind == 4) {
-      const double w = rng.uniform(0.5, 1.1), h = rng.uniform(0.7, 1.3), bottom = rng.uniform(0.6, 1.0);
+      const double w = rng.uniform(0.5, 1.1), h = rng.uniform(0.7, 1.3),
+                   bottom = rng.uniform(0.6, 1.0);
       poster(cv::Size(static_cast<int>(w * tpm), static_cast<int>(h * tpm)), rng)
-          .copyTo(image(cv::Rect(px, row_of(bottom + h), static_cast<int>(w * tpm), static_cast<int>(h * tpm))));
+          .copyTo(image(cv::Rect(px, row_of(bottom + h), static_cast<int>(w * tpm),
+                                 static_cast<int>(h * tpm))));
       used = w;
     } else if (kind == 2) {
       const double w = rng.uniform(1.4, 2.4);
-      drawWindow(image, cv::Rect(px, row_of(2.2), static_cast<int>(w * tpm), static_cast<int>(1.7 * tpm)), 4, rng);
+      drawWindow(image,
+                 cv::Rect(px, row_of(2.2), static_cast<int>(w * tpm), static_cast<int>(1.7 * tpm)),
+                 4, rng);
       used = w;
     } else if (kind == 3) {  // notice board: cork with small notes
-      const cv::Rect board(px, row_of(2.0), static_cast<int>(1.2 * tpm), static_cast<int>(0.9 * tpm));
+      const cv::Rect board(px, row_of(2.0), static_cast<int>(1.2 * tpm),
+                           static_cast<int>(0.9 * tpm));
       cv::Mat cork = fractalNoise(board.size(), 0.05 * tpm, 3, 0.7, rng);
       cork.convertTo(image(board), CV_8U, 40, 140);
       for (int k = rng.uniform(3, 7); k > 0; --k) {
-        const cv::Size note(static_cast<int>(rng.uniform(0.15, 0.3) * tpm), static_cast<int>(rng.uniform(0.18, 0.35) * tpm));
-        const cv::Point at(board.x + rng.uniform(0, board.width - note.width), board.y + rng.uniform(0, board.height - note.height));
+        const cv::Size note(static_cast<int>(rng.uniform(0.15, 0.3) * tpm),
+                            static_cast<int>(rng.uniform(0.18, 0.35) * tpm));
+        const cv::Point at(board.x + rng.uniform(0, board.width - note.width),
+                           board.y + rng.uniform(0, board.height - note.height));
         poster(note, rng).copyTo(image(cv::Rect(at, note)));
       }
       used = 1.2;
     } else {  // ventilation grille: repetitive slats
-      const cv::Rect grille(px, row_of(rng.uniform(0.6, 1.8)), static_cast<int>(0.8 * tpm), static_cast<int>(0.5 * tpm));
+      const cv::Rect grille(px, row_of(rng.uniform(0.6, 1.8)), static_cast<int>(0.8 * tpm),
+                            static_cast<int>(0.5 * tpm));
       image(grille).setTo(cv::Scalar(rng.uniform(40, 90)));
       for (int y = grille.y; y < grille.br().y; y += std::max(3, static_cast<int>(0.04 * tpm))) {
-        cv::line(image, {grille.x, y}, {grille.br().x - 1, y}, cv::Scalar(rng.uniform(150, 220)), 1);
+        cv::line(image, {grille.x, y}, {grille.br().x - 1, y}, cv::Scalar(rng.uniform(150, 220)),
+                 1);
       }
       used = 0.8;
     }
     x += used + rng.uniform(0.15, 0.9);
   }
   for (int k = rng.uniform(1, 3); k > 0; --k) {
-    const cv::Rect sign(rng.uniform(0, image.cols - static_cast<int>(3.5 * tpm)), ground_y - static_cast<int>(0.1 * tpm),
+    const cv::Rect sign(rng.uniform(0, image.cols - static_cast<int>(3.5 * tpm)),
+                        ground_y - static_cast<int>(0.1 * tpm),
                         static_cast<int>(rng.uniform(1.5, 3.5) * tpm), static_cast<int>(0.3 * tpm));
     cv::rectangle(image, sign, cv::Scalar(rng.uniform(20, 60)), cv::FILLED);
-    drawTextInBox(image, randomWord(rng, 2, 3), sign, 235, cv::FONT_HERSHEY_TRIPLEX, std::max(1, sign.height / 12));
+    drawTextInBox(image, randomWord(rng, 2, 3), sign, 235, cv::FONT_HERSHEY_TRIPLEX,
+                  std::max(1, sign.height / 12));
   }
   // Drain pipes and climbing plants.
   for (int k = rng.uniform(1, 3); k > 0; --k) {
     const int x = rng.uniform(0, image.cols);
-    cv::line(image, {x, 0}, {x, image.rows}, cv::Scalar(rng.uniform(30, 90)), std::max(2, static_cast<int>(0.08 * tpm)));
+    cv::line(image, {x, 0}, {x, image.rows}, cv::Scalar(rng.uniform(30, 90)),
+             std::max(2, static_cast<int>(0.08 * tpm)));
   }
   // Shrubs along the foot of the facade (below 1.4 m).
   const cv::Rect foot(0, row_of(1.4), image.cols, image.rows - row_of(1.4));
   cv::Mat plant = fractalNoise(foot.size(), 1.2 * tpm, 5, 0.6, rng);
-  for (int y = 0; y < foot.height; ++y) plant.row(y) += 0.6f * (static_cast<float>(y) / foot.height - 0.6f);
+  for (int y = 0; y < foot.height; ++y)
+    plant.row(y) += 0.6f * (static_cast<float>(y) / foot.height - 0.6f);
   cv::Mat leaves = fractalNoise(foot.size(), 0.08 * tpm, 3, 0.7, rng);
   cv::Mat leaf_image;
   leaves.convertTo(leaf_image, CV_8U, 90, 70);
@@ -205,8 +229,9 @@ cv::Mat pavedGround(double width_m, double depth_m, double texels_per_metre, std
   for (double y = 0; y < image.rows; y += slab) {
     const double offset = rng.uniform(0.0, slab);
     for (double x = -offset; x < image.cols; x += slab) {
-      cv::rectangle(image, cv::Rect(static_cast<int>(x + 2), static_cast<int>(y + 2),
-                                    static_cast<int>(slab - 3), static_cast<int>(slab - 3)),
+      cv::rectangle(image,
+                    cv::Rect(static_cast<int>(x + 2), static_cast<int>(y + 2),
+                             static_cast<int>(slab - 3), static_cast<int>(slab - 3)),
                     cv::Scalar(rng.uniform(115, 175)), cv::FILLED);
     }
   }
@@ -224,7 +249,8 @@ cv::Mat pavedGround(double width_m, double depth_m, double texels_per_metre, std
   for (int k = rng.uniform(2, 5); k > 0; --k) {
     const cv::Rect box(rng.uniform(0, image.cols * 3 / 4), rng.uniform(0, image.rows * 3 / 4),
                        static_cast<int>(2.0 * tpm), static_cast<int>(0.6 * tpm));
-    drawTextInBox(image, randomWord(rng, 1, 2), box, 235, cv::FONT_HERSHEY_SIMPLEX, std::max(1, static_cast<int>(0.05 * tpm)));
+    drawTextInBox(image, randomWord(rng, 1, 2), box, 235, cv::FONT_HERSHEY_SIMPLEX,
+                  std::max(1, static_cast<int>(0.05 * tpm)));
   }
   addNoise(image, 25, 2.0 * tpm, 4, rng);
   addNoise(image, 14, 0.03 * tpm, 2, rng);
@@ -254,7 +280,10 @@ struct Field {
 float fieldValue(const Field& f, int x, int y, float fine) {
   switch (f.kind) {
     case 0:
-      return f.level + ((static_cast<int>(std::floor((x * f.dx + y * f.dy) / f.period)) & 1) ? f.amplitude : -f.amplitude) + 6 * fine;
+      return f.level +
+             ((static_cast<int>(std::floor((x * f.dx + y * f.dy) / f.period)) & 1) ? f.amplitude
+                                                                                   : -f.amplitude) +
+             6 * fine;
     case 1:
       return f.level + 14 * fine;
     case 2: {
@@ -279,7 +308,8 @@ cv::Mat terrain(int height, std::uint32_t seed) {
   const int fields = width * height / (110 * 110);
   cv::Mat seeds(height, width + 2 * margin, CV_8U, cv::Scalar(255));
   std::vector<cv::Point> centres;
-  for (int k = 0; k < fields; ++k) centres.emplace_back(rng.uniform(0, width), rng.uniform(0, height));
+  for (int k = 0; k < fields; ++k)
+    centres.emplace_back(rng.uniform(0, width), rng.uniform(0, height));
   for (const cv::Point& c : centres) {
     for (int shift : {-width, 0, width}) {
       const int x = c.x + shift + margin;
@@ -287,14 +317,16 @@ cv::Mat terrain(int height, std::uint32_t seed) {
     }
   }
   cv::Mat distance, labels;
-  cv::distanceTransform(seeds, distance, labels, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
+  cv::distanceTransform(seeds, distance, labels, cv::DIST_L2, cv::DIST_MASK_5,
+                        cv::DIST_LABEL_PIXEL);
   std::vector<int> field_of_label(static_cast<size_t>(fields) * 3 + 2, 0);
   for (int k = 0; k < fields; ++k) {
     for (int shift : {-width, 0, width}) {
       const int x = centres[static_cast<size_t>(k)].x + shift + margin;
       if (x < 0 || x >= seeds.cols) continue;
       const int label = labels.at<int>(centres[static_cast<size_t>(k)].y, x);
-      if (label >= 0 && static_cast<size_t>(label) < field_of_label.size()) field_of_label[static_cast<size_t>(label)] = k;
+      if (label >= 0 && static_cast<size_t>(label) < field_of_label.size())
+        field_of_label[static_cast<size_t>(label)] = k;
     }
   }
   std::vector<Field> params(static_cast<size_t>(fields));
@@ -315,12 +347,16 @@ cv::Mat terrain(int height, std::uint32_t seed) {
     const float* noise = fine.ptr<float>(y);
     uchar* out = image.ptr<uchar>(y);
     for (int x = 0; x < width; ++x) {
-      const int id = field_of_label[static_cast<size_t>(std::min<int>(label[x], static_cast<int>(field_of_label.size()) - 1))];
+      const int id = field_of_label[static_cast<size_t>(
+          std::min<int>(label[x], static_cast<int>(field_of_label.size()) - 1))];
       float v = fieldValue(params[static_cast<size_t>(id)], x, y, noise[x]);
       // Hedges and tracks along the field borders.
-      const int right = label[x + 1 < width + margin ? x + 1 : x], below = y + 1 < height ? labels.ptr<int>(y + 1)[margin + x] : label[x];
-      if (field_of_label[static_cast<size_t>(std::min<int>(right, static_cast<int>(field_of_label.size()) - 1))] != id ||
-          field_of_label[static_cast<size_t>(std::min<int>(below, static_cast<int>(field_of_label.size()) - 1))] != id) {
+      const int right = label[x + 1 < width + margin ? x + 1 : x],
+                below = y + 1 < height ? labels.ptr<int>(y + 1)[margin + x] : label[x];
+      if (field_of_label[static_cast<size_t>(
+              std::min<int>(right, static_cast<int>(field_of_label.size()) - 1))] != id ||
+          field_of_label[static_cast<size_t>(
+              std::min<int>(below, static_cast<int>(field_of_label.size()) - 1))] != id) {
         v = 35;
       }
       out[x] = cv::saturate_cast<uchar>(v);
@@ -331,22 +367,25 @@ cv::Mat terrain(int height, std::uint32_t seed) {
   for (int k = 0; k < width * height / 60000; ++k) {
     const cv::Point c(rng.uniform(0, width), rng.uniform(0, height));
     for (int b = rng.uniform(3, 12); b > 0; --b) {
-      const cv::Rect house(c.x + rng.uniform(-60, 60), c.y + rng.uniform(-60, 60), rng.uniform(8, 30), rng.uniform(8, 30));
+      const cv::Rect house(c.x + rng.uniform(-60, 60), c.y + rng.uniform(-60, 60),
+                           rng.uniform(8, 30), rng.uniform(8, 30));
       const cv::Scalar roof(rng.uniform(0, 2) ? rng.uniform(200, 250) : rng.uniform(20, 60));
       for (int shift : {-width, 0, width}) {
         cv::rectangle(image, house + cv::Point(shift, 0), roof, cv::FILLED);
-        cv::line(image, house.tl() + cv::Point(shift, house.height / 2), house.br() + cv::Point(shift, -house.height / 2),
-                 cv::Scalar(110), 1);
+        cv::line(image, house.tl() + cv::Point(shift, house.height / 2),
+                 house.br() + cv::Point(shift, -house.height / 2), cv::Scalar(110), 1);
       }
     }
   }
   for (int k = 0; k < width * height / 200000; ++k) {
     std::vector<cv::Point> road = {{rng.uniform(0, width), rng.uniform(0, height)}};
-    for (int s = 0; s < 8; ++s) road.push_back(road.back() + cv::Point(rng.uniform(-300, 300), rng.uniform(-300, 300)));
+    for (int s = 0; s < 8; ++s)
+      road.push_back(road.back() + cv::Point(rng.uniform(-300, 300), rng.uniform(-300, 300)));
     const cv::Scalar colour(rng.uniform(0, 2) ? 215 : 25);
     for (int shift : {-width, 0, width}) {
       std::vector<cv::Point> shifted;
-      for (const cv::Point& p : road) shifted.push_back(p + cv::Point(shift, 0));
+      for (const cv::Point& p : road)
+        shifted.push_back(p + cv::Point(shift, 0));
       cv::polylines(image, shifted, false, colour, 5, cv::LINE_AA);
     }
   }

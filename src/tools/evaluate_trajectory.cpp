@@ -16,7 +16,8 @@ namespace {
 
 const char* kUsage =
     "usage: evaluate_trajectory GROUNDTRUTH ESTIMATE [--align sim3|se3] [--json] [--plot FILE]\n"
-    "                           [--out DIR] [--max-dt S] [--rpe-distances D1,D2,..] [--segments N]\n"
+    "                           [--out DIR] [--max-dt S] [--rpe-distances D1,D2,..] [--segments "
+    "N]\n"
     "Scores an estimated trajectory against ground truth. Both files are TUM format\n"
     "('t tx ty tz qx qy qz qw', camera pose in the world) or EuRoC csv ('t_ns, px, py, pz, qw,\n"
     "qx, qy, qz, ...'). Poses are associated by timestamp, the estimate is aligned by Umeyama\n"
@@ -38,7 +39,8 @@ std::vector<double> parseList(const std::string& text) {
     char* end = nullptr;
     const double value = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0') {
-      throw std::invalid_argument("--rpe-distances expects numbers separated by commas, got '" + text + "'");
+      throw std::invalid_argument("--rpe-distances expects numbers separated by commas, got '" +
+                                  text + "'");
     }
     values.push_back(value);
   }
@@ -65,8 +67,8 @@ int run(const sds::io::CommandLine& cl) {
   params.scale_segments = static_cast<int>(cl.integer("segments", params.scale_segments));
   params.validate();
 
-  const auto evaluation =
-      sds::evaluation::evaluateTrajectory(load(truth_path, "ground truth"), load(estimate_path, "estimate"), params);
+  const auto evaluation = sds::evaluation::evaluateTrajectory(
+      load(truth_path, "ground truth"), load(estimate_path, "estimate"), params);
   nlohmann::json json = sds::evaluation::toJson(evaluation);
   json["ground_truth_file"] = truth_path;
   json["estimate_file"] = estimate_path;

@@ -19,7 +19,8 @@ const char* kUsage =
     "usage: render_sequence --scene NAME --out DIR [--bag FILE] [--seed N] [options]\n"
     "Renders a synthetic image sequence with exact ground truth (doc/sequences.md).\n"
     "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover.\n"
-    "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, TUM),\n"
+    "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, "
+    "TUM),\n"
     "DIR/camera.yaml; with --bag FILE also a rosbag (/camera/image_raw, /camera/camera_info,\n"
     "/ground_truth/pose, /tf world -> camera_ground_truth), all stamped alike.\n"
     "Options:\n"
@@ -69,7 +70,8 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
     double start = 0, length = 0;
     char rest = 0;
     if (std::sscanf(blackout->c_str(), "%lf:%lf%c", &start, &length, &rest) != 2) {
-      throw std::invalid_argument("--blackout expects START:LENGTH in seconds, got '" + *blackout + "'");
+      throw std::invalid_argument("--blackout expects START:LENGTH in seconds, got '" + *blackout +
+                                  "'");
     }
     p.realism.blackout_start = start;
     p.realism.blackout_duration = length;
@@ -79,10 +81,16 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
 }
 
 int run(const sds::io::CommandLine& cl) {
-  cl.rejectUnknownFlags({"scene", "out", "bag", "seed", "frames", "fps", "width", "height", "fov",
-                         "distortion", "color", "noise", "exposure", "exposure-period",
-                         "motion-blur", "blur-samples", "optics-blur", "blackout", "start-time",
-                         "quiet"});
+  cl.rejectUnknownFlags({"scene",       "out",
+                         "bag",         "seed",
+                         "frames",      "fps",
+                         "width",       "height",
+                         "fov",         "distortion",
+                         "color",       "noise",
+                         "exposure",    "exposure-period",
+                         "motion-blur", "blur-samples",
+                         "optics-blur", "blackout",
+                         "start-time",  "quiet"});
   if (!cl.positional().empty()) {
     throw std::invalid_argument("unexpected argument '" + cl.positional().front() + "'");
   }

@@ -46,13 +46,17 @@ int main(int argc, char** argv) {
   }
   const std::string out = std::filesystem::temp_directory_path() / "sds_bench_render";
   std::filesystem::remove_all(out);
-  report.timeMs("office_orbit: 600 frames 640x480 to a TUM folder (PNG)", 1, [&] {
-    sds::sim::SequenceParams params;
-    params.scene = "office_orbit";
-    sds::sim::SequenceRenderer renderer(params);
-    sds::sim::TumSequenceWriter writer(out, renderer.calibration());
-    for (int i = 0; i < renderer.frameCount(); ++i) writer.add(renderer.render(i));
-  }, "scene build, rendering, optics blur, PNG writing");
+  report.timeMs(
+      "office_orbit: 600 frames 640x480 to a TUM folder (PNG)", 1,
+      [&] {
+        sds::sim::SequenceParams params;
+        params.scene = "office_orbit";
+        sds::sim::SequenceRenderer renderer(params);
+        sds::sim::TumSequenceWriter writer(out, renderer.calibration());
+        for (int i = 0; i < renderer.frameCount(); ++i)
+          writer.add(renderer.render(i));
+      },
+      "scene build, rendering, optics blur, PNG writing");
   std::filesystem::remove_all(out);
   return 0;
 }

@@ -49,7 +49,8 @@ TEST(TrajectoryEvaluation, RecoversAKnownSimilarityWithZeroError) {
     EXPECT_LT(r.translation.max, 1e-9);
     EXPECT_LT(r.rotation_deg.max, 1e-5);
   }
-  for (const ScaleSegment& s : e.scale_segments) EXPECT_NEAR(s.scale, 1.0, 1e-9);
+  for (const ScaleSegment& s : e.scale_segments)
+    EXPECT_NEAR(s.scale, 1.0, 1e-9);
   EXPECT_NEAR(e.truth_path_length, 2 * M_PI * 10, 1.0);
 
   // SE(3) alignment cannot undo the scale: the error is large.
@@ -82,7 +83,8 @@ TEST(TrajectoryEvaluation, MeasuresScaleDriftPerSegment) {
   double length = 0;
   const double total = 2 * M_PI * 10;
   for (size_t i = 1; i < truth.size(); ++i) {
-    const Eigen::Vector3d step = truth[i].T_world_cam.translation() - truth[i - 1].T_world_cam.translation();
+    const Eigen::Vector3d step =
+        truth[i].T_world_cam.translation() - truth[i - 1].T_world_cam.translation();
     const double k = 1.0 + 0.5 * (length + 0.5 * step.norm()) / total;
     estimate[i].T_world_cam.translation() = estimate[i - 1].T_world_cam.translation() + k * step;
     length += step.norm();
@@ -108,7 +110,9 @@ TEST(TrajectoryEvaluation, MeasuresAKnownRotationDriftInTheRpe) {
     const double t = 0.1 * i;
     const Eigen::Vector3d p(t, 0.0, 0.0);
     truth.push_back({t, geometry::SE3(Eigen::Quaterniond::Identity(), p)});
-    estimate.push_back({t, geometry::SE3(Eigen::Quaterniond(Eigen::AngleAxisd(rate * t, Eigen::Vector3d::UnitY())), p)});
+    estimate.push_back(
+        {t, geometry::SE3(Eigen::Quaterniond(Eigen::AngleAxisd(rate * t, Eigen::Vector3d::UnitY())),
+                          p)});
   }
   EvaluationParams params;
   params.rpe_distances = {5.0};

@@ -5,10 +5,10 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <tf2_msgs/TFMessage.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "scale_drift_slam/io/trajectory_io.h"
 #include "scale_drift_slam/ros/bag_io.h"
@@ -54,15 +54,15 @@ TEST(BagIo, BagAndFolderHoldTheSameFramesAndStamps) {
     }
     ASSERT_EQ(images.size(), entries.size());
     ASSERT_EQ(images.size(), 5u);
-    const geometry::CameraCalibration folder_calibration =
-        sim::SequenceRenderer([] {
-          sim::SequenceParams p;
-          p.scene = "office_orbit";
-          p.width = 160;
-          p.height = 120;
-          p.distortion = "radtan";
-          return p;
-        }()).calibration();
+    const geometry::CameraCalibration folder_calibration = sim::SequenceRenderer([] {
+                                                             sim::SequenceParams p;
+                                                             p.scene = "office_orbit";
+                                                             p.width = 160;
+                                                             p.height = 120;
+                                                             p.distortion = "radtan";
+                                                             return p;
+                                                           }())
+                                                               .calibration();
     for (size_t i = 0; i < images.size(); ++i) {
       EXPECT_EQ(sim::TumSequenceWriter::formatStamp(images[i].stamp_ns), entries[i].first);
       const cv::Mat png = cv::imread(directory + "/" + entries[i].second, cv::IMREAD_UNCHANGED);
@@ -88,9 +88,11 @@ TEST(BagIo, BagAndFolderHoldTheSameFramesAndStamps) {
       ASSERT_EQ(tf->transforms.size(), 1u);
       EXPECT_EQ(tf->transforms[0].header.frame_id, "world");
       EXPECT_EQ(tf->transforms[0].child_frame_id, "camera_ground_truth");
-      EXPECT_EQ(sim::TumSequenceWriter::formatStamp(static_cast<std::int64_t>(tf->transforms[0].header.stamp.toNSec())),
+      EXPECT_EQ(sim::TumSequenceWriter::formatStamp(
+                    static_cast<std::int64_t>(tf->transforms[0].header.stamp.toNSec())),
                 entries[count].first);
-      EXPECT_NEAR(tf->transforms[0].transform.translation.x, truth[count].T_world_cam.translation().x(), 1e-12);
+      EXPECT_NEAR(tf->transforms[0].transform.translation.x,
+                  truth[count].T_world_cam.translation().x(), 1e-12);
       ++count;
     }
     EXPECT_EQ(count, 5u);
@@ -108,7 +110,8 @@ TEST(BagIo, MissingBagsAndTopicsAreReportedWithTheReason) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/wrong/topic"), std::string::npos);
   }
-  EXPECT_THROW(SequenceBagWriter("/proc/forbidden.bag", geometry::CameraCalibration()), std::runtime_error);
+  EXPECT_THROW(SequenceBagWriter("/proc/forbidden.bag", geometry::CameraCalibration()),
+               std::runtime_error);
 }
 
 }  // namespace

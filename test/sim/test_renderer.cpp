@@ -58,14 +58,16 @@ CornerErrors chessboardErrors(const std::string& distortion, const geometry::SE3
   for (int r = 1; r < rows; ++r) {
     for (int c = 1; c < cols; ++c) {
       // Inner corner (c, r) of the squares lies at texel ((c + 1) * square, (r + 1) * square).
-      const Eigen::Vector3d p_world = top_left + Eigen::Vector3d((c + 1) * square, (r + 1) * square, 0);
+      const Eigen::Vector3d p_world =
+          top_left + Eigen::Vector3d((c + 1) * square, (r + 1) * square, 0);
       const auto pixel = camera->project(T_world_cam.inverse() * p_world);
       if (pixel) truth.push_back(*pixel);
     }
   }
   for (const cv::Point2f& corner : corners) {
     double best = 1e9;
-    for (const Eigen::Vector2d& t : truth) best = std::min(best, (t - Eigen::Vector2d(corner.x, corner.y)).norm());
+    for (const Eigen::Vector2d& t : truth)
+      best = std::min(best, (t - Eigen::Vector2d(corner.x, corner.y)).norm());
     errors.max = std::max(errors.max, best);
     errors.mean += best / corners.size();
   }
@@ -83,7 +85,8 @@ geometry::SE3 boardViewpoint(double yaw, double pitch, const Eigen::Vector3d& ce
 TEST(Renderer, ChessboardCornersMatchTheTrueProjection) {
   for (const std::string distortion : {"none", "radtan", "fisheye"}) {
     for (const double yaw : {0.0, 0.35}) {
-      const CornerErrors errors = chessboardErrors(distortion, boardViewpoint(yaw, 0.2, {0.02, 0.01, 0}));
+      const CornerErrors errors =
+          chessboardErrors(distortion, boardViewpoint(yaw, 0.2, {0.02, 0.01, 0}));
       SCOPED_TRACE(distortion + " yaw " + std::to_string(yaw));
       std::printf("chessboard %-8s yaw %.2f: %d corners, max error %.3f px, mean %.3f px\n",
                   distortion.c_str(), yaw, errors.detected, errors.max, errors.mean);
@@ -101,7 +104,8 @@ double medianFlowError(const std::string& scene_name, const std::string& distort
   const Scenario scenario = makeScenario(scene_name, 3);
   SequenceParams params;
   params.distortion = distortion;
-  const auto camera = geometry::makeCameraModel(sequenceCalibration(params, scenario.horizontal_fov_deg));
+  const auto camera =
+      geometry::makeCameraModel(sequenceCalibration(params, scenario.horizontal_fov_deg));
   Renderer renderer(*camera);
   const double t0 = 2.0;
   const geometry::SE3 T_w_c0 = scenario.T_world_cam(t0), T_w_c1 = scenario.T_world_cam(t0 + dt);
@@ -115,11 +119,13 @@ double medianFlowError(const std::string& scene_name, const std::string& distort
                    cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 1e-3));
   std::vector<uchar> status;
   std::vector<float> error;
-  cv::calcOpticalFlowPyrLK(image0, image1, corners, moved, status, error, cv::Size(21, 21), 3,
-                           cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
+  cv::calcOpticalFlowPyrLK(
+      image0, image1, corners, moved, status, error, cv::Size(21, 21), 3,
+      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-3));
   std::vector<double> errors;
   for (size_t i = 0; i < corners.size(); ++i) {
-    const int x = static_cast<int>(std::lround(corners[i].x)), y = static_cast<int>(std::lround(corners[i].y));
+    const int x = static_cast<int>(std::lround(corners[i].x)),
+              y = static_cast<int>(std::lround(corners[i].y));
     if (!status[i] || x < 2 || y < 2 || x >= range.cols - 2 || y >= range.rows - 2) continue;
     // Skip corners on depth edges: their range is ambiguous.
     double lo = 1e9, hi = 0;
@@ -132,7 +138,8 @@ double medianFlowError(const std::string& scene_name, const std::string& distort
     if (!std::isfinite(hi) || hi > 1.03 * lo) continue;
     // The range at the nearest pixel centre, moved to the corner's ray (planar surface).
     const Eigen::Vector3d ray_pixel = camera->unproject(Eigen::Vector2d(x, y)).normalized();
-    const Eigen::Vector3d ray = camera->unproject(Eigen::Vector2d(corners[i].x, corners[i].y)).normalized();
+    const Eigen::Vector3d ray =
+        camera->unproject(Eigen::Vector2d(corners[i].x, corners[i].y)).normalized();
     const Eigen::Vector3d p_c0 = ray * (range.at<float>(y, x) * ray_pixel.z() / ray.z());
     const auto predicted = camera->project(T_w_c1.inverse() * (T_w_c0 * p_c0));
     if (!predicted) continue;
@@ -162,15 +169,17 @@ TEST(Renderer, TrackedFeaturesMoveAsTheGroundTruthPredicts) {
 TEST(Renderer, DistantFineTextureIsFilteredNotAliased) {
   // One-texel stripes (mean 127.5) seen from far away must render as a flat grey.
   cv::Mat stripes(512, 512, CV_8U);
-  for (int x = 0; x < 512; ++x) stripes.col(x).setTo(cv::Scalar(x % 2 ? 255 : 0));
+  for (int x = 0; x < 512; ++x)
+    stripes.col(x).setTo(cv::Scalar(x % 2 ? 255 : 0));
   Scene scene;
   scene.addQuad(Eigen::Vector3d(-5, -5, 0), Eigen::Vector3d(10, 0, 0), Eigen::Vector3d(0, 10, 0),
                 stripes);
   const auto camera = geometry::makeCameraModel(testCamera("none"));
   Renderer renderer(*camera);
   cv::Mat image;
-  const geometry::SE3 T_world_cam(lookRotation(Eigen::Vector3d(0.2, 0.1, -1), Eigen::Vector3d::UnitY()),
-                                  Eigen::Vector3d(0, 0, 30));
+  const geometry::SE3 T_world_cam(
+      lookRotation(Eigen::Vector3d(0.2, 0.1, -1), Eigen::Vector3d::UnitY()),
+      Eigen::Vector3d(0, 0, 30));
   renderer.render(scene, T_world_cam.inverse(), image);
   cv::Mat mask = renderer.surfaceIndex() == 0;
   ASSERT_GT(cv::countNonZero(mask), 10000);
@@ -184,8 +193,8 @@ TEST(Renderer, OcclusionKeepsTheNearerSurface) {
   Scene scene;
   scene.addQuad(Eigen::Vector3d(-1, -1, 0), Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 2, 0),
                 cv::Mat(8, 8, CV_8U, cv::Scalar(50)));
-  scene.addQuad(Eigen::Vector3d(-0.2, -0.2, 1), Eigen::Vector3d(0.4, 0, 0), Eigen::Vector3d(0, 0.4, 0),
-                cv::Mat(8, 8, CV_8U, cv::Scalar(200)));
+  scene.addQuad(Eigen::Vector3d(-0.2, -0.2, 1), Eigen::Vector3d(0.4, 0, 0),
+                Eigen::Vector3d(0, 0.4, 0), cv::Mat(8, 8, CV_8U, cv::Scalar(200)));
   const auto camera = geometry::makeCameraModel(testCamera("none"));
   Renderer renderer(*camera);
   cv::Mat image;

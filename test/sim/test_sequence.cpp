@@ -63,7 +63,8 @@ TEST(Sequence, FrameCountsAndStampsFollowTheScenario) {
   double closest = 1e9;
   for (int i = 800; i < 900; ++i) {
     closest = std::min(closest, (renderer.pose(i).T_world_cam.translation() -
-                                 renderer.pose(0).T_world_cam.translation()).norm());
+                                 renderer.pose(0).T_world_cam.translation())
+                                    .norm());
   }
   EXPECT_LT(closest, 0.2);
 }
@@ -100,7 +101,8 @@ TEST(Sequence, RealismFlagsChangeTheImagesAsSpecified) {
   SequenceRenderer exposure(bright), unexposed(reference);
   double lowest = 1e9, highest = 0;
   for (int i = 0; i < 6; ++i) {
-    const double ratio = cv::mean(exposure.render(i).image)[0] / cv::mean(unexposed.render(i).image)[0];
+    const double ratio =
+        cv::mean(exposure.render(i).image)[0] / cv::mean(unexposed.render(i).image)[0];
     lowest = std::min(lowest, ratio);
     highest = std::max(highest, ratio);
   }
@@ -143,7 +145,8 @@ TEST(Sequence, TumFolderHoldsTheFramesStampsAndPoses) {
     ASSERT_LT(i, frames.size());
     const std::string stamp = TumSequenceWriter::formatStamp(frames[i].stamp_ns);
     EXPECT_EQ(line, stamp + " rgb/" + stamp + ".png");
-    EXPECT_TRUE(identical(cv::imread(directory + "/rgb/" + stamp + ".png", cv::IMREAD_UNCHANGED), frames[i].image));
+    EXPECT_TRUE(identical(cv::imread(directory + "/rgb/" + stamp + ".png", cv::IMREAD_UNCHANGED),
+                          frames[i].image));
     EXPECT_NEAR(truth[i].timestamp, frames[i].timestamp, 1e-9);
     EXPECT_LT((truth[i].T_world_cam.matrix() - frames[i].T_world_cam.matrix()).norm(), 1e-12);
     ++i;

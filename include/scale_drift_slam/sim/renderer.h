@@ -49,9 +49,9 @@ class Renderer {
                   const Eigen::Vector2d& pb, int depth, std::vector<Eigen::Vector2d>& out) const;
 
   std::unique_ptr<geometry::CameraModel> camera_;  ///< Own copy of the model.
-  bool linear_;  ///< No distortion: project with K alone.
+  bool linear_;                                    ///< No distortion: project with K alone.
   int width_, height_;
-  std::vector<float> rays_;        ///< 3 floats per pixel, unit length (distorted cameras).
+  std::vector<float> rays_;              ///< 3 floats per pixel, unit length (distorted cameras).
   std::vector<float> column_x_, row_y_;  ///< x/z per column, y/z per row (linear cameras).
   /// Per pixel log2(alpha) + 2 log2|r| for the ray r the rasteriser uses (unit for distorted
   /// cameras, z = 1 for linear ones), alpha the pixel's angular size; see Prepared.

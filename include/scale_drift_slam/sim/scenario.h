@@ -18,9 +18,9 @@ struct Scenario {
   std::string name;
   std::string description;
   Scene scene;
-  double duration = 0.0;            ///< Seconds covered by the trajectory.
-  double rate = 30.0;               ///< Default frame rate (Hz).
-  double horizontal_fov_deg = 80.0; ///< Default horizontal field of view of the camera.
+  double duration = 0.0;             ///< Seconds covered by the trajectory.
+  double rate = 30.0;                ///< Default frame rate (Hz).
+  double horizontal_fov_deg = 80.0;  ///< Default horizontal field of view of the camera.
   /// The camera pose in the world (camera -> world) at time t in [0, duration].
   std::function<geometry::SE3(double t)> T_world_cam;
 };

@@ -24,7 +24,7 @@ struct Surface {
   int texture = 0;  ///< Index into Scene::textures().
   Eigen::Vector2d texel_origin = Eigen::Vector2d::Zero();
   Eigen::Matrix2d texel_axes = Eigen::Matrix2d::Identity();
-  float gain = 1.0f;  ///< Brightness factor (illumination of this surface).
+  float gain = 1.0f;                       ///< Brightness factor (illumination of this surface).
   Eigen::Vector3f tint{1.0f, 1.0f, 1.0f};  ///< B, G, R factors for colour output.
   /// False: visible only from the front, where the texture is not mirrored (edge1 to the right,
   /// edge2 downwards), i.e. invisible from the side that edge1 x edge2 points to.

@@ -43,7 +43,7 @@ struct SequenceParams {
   bool color = false;               ///< bgr8 images instead of mono8.
   double start_time = 1000.0;       ///< Stamp of the first frame, seconds.
   RealismParams realism;
-  void validate() const;            ///< Throws std::invalid_argument with the reason.
+  void validate() const;  ///< Throws std::invalid_argument with the reason.
 };
 
 /// One frame: its stamp (exact integer nanoseconds and the same in seconds), the true camera pose

@@ -2,8 +2,8 @@
 // Writes rendered frames as a TUM RGB-D style folder:
 //   DIR/rgb/<stamp>.png     the images (mono8 or bgr8)
 //   DIR/rgb.txt             "stamp rgb/<stamp>.png" per frame
-//   DIR/groundtruth.txt     "stamp tx ty tz qx qy qz qw", the camera pose in the world (T_world_cam)
-//   DIR/camera.yaml         the calibration (io/calibration_io.h layout)
+//   DIR/groundtruth.txt     "stamp tx ty tz qx qy qz qw", the camera pose in the world
+//   (T_world_cam) DIR/camera.yaml         the calibration (io/calibration_io.h layout)
 // Stamps are written with 9 decimals from the frame's integer nanoseconds, so they are exact.
 
 #include <fstream>

@@ -57,9 +57,10 @@ class Texture {
     const int xi = static_cast<int>((u * level.scale_x - 0.5f) * 256.0f + 65536.0f) - 65536;
     const int yi = static_cast<int>((v * level.scale_y - 0.5f) * 256.0f + 65536.0f) - 65536;
     const int fx = xi & 255, fy = yi & 255;
-    const std::uint8_t* row0 = level.data + static_cast<std::ptrdiff_t>(yi >> 8) *
-                                                static_cast<std::ptrdiff_t>(level.stride) +
-                               (xi >> 8);
+    const std::uint8_t* row0 =
+        level.data +
+        static_cast<std::ptrdiff_t>(yi >> 8) * static_cast<std::ptrdiff_t>(level.stride) +
+        (xi >> 8);
     const std::uint8_t* row1 = row0 + level.stride;
     const int top = (row0[0] << 8) + (row0[1] - row0[0]) * fx;
     const int bottom = (row1[0] << 8) + (row1[1] - row1[0]) * fx;

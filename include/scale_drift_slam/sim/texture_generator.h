@@ -47,8 +47,8 @@ cv::Mat floorMaterial(const std::string& kind, double width_m, double depth_m,
                       double texels_per_metre, std::uint32_t seed);
 /// Furniture surfaces: "desk" (wood with papers and a keyboard), "cabinet" (doors and handles),
 /// "books" (shelves of book spines), "screen" (a monitor showing windows of text).
-cv::Mat furniture(const std::string& kind, double width_m, double height_m,
-                  double texels_per_metre, std::uint32_t seed);
+cv::Mat furniture(const std::string& kind, double width_m, double height_m, double texels_per_metre,
+                  std::uint32_t seed);
 /// An equirectangular terrain map (width = 2 height) for a sphere: fields with crop rows,
 /// roads, villages, forests and lakes. Periodic in longitude.
 cv::Mat terrain(int height, std::uint32_t seed);
