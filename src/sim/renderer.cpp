@@ -7,24 +7,14 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "span_shader.h"
+
 namespace scale_drift_slam::sim {
 namespace {
 
 constexpr double kNear = 0.02;               ///< Near clipping distance (metres, along z).
 constexpr float kInsideTolerance = 1e-6f;    ///< Closes cracks between surfaces sharing an edge.
 constexpr double kMaxCurveDeviation = 0.25;  ///< Pixels; distorted edges are split until this.
-
-/// log2(x) for x > 0, to about 0.005 (enough to pick a mip level): exponent plus a quadratic in
-/// the mantissa m in [1, 2).
-inline float fastLog2(float x) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &x, sizeof(bits));
-  const float exponent = static_cast<float>(static_cast<int>((bits >> 23) & 255u) - 127);
-  bits = (bits & 0x007fffffu) | 0x3f800000u;
-  float m;
-  std::memcpy(&m, &bits, sizeof(m));
-  return exponent + (-0.34484843f * m + 2.02466578f) * m - 1.67487759f;
-}
 
 using Polygon = std::vector<Eigen::Vector3d>;
 
@@ -62,14 +52,16 @@ struct Renderer::Prepared {
 
 Renderer::Renderer(const geometry::CameraModel& camera)
     : camera_(geometry::makeCameraModel(camera.calibration())),
+      vectorised_(detail::vectorShadingAvailable()),
       width_(camera.width()),
       height_(camera.height()) {
   const geometry::CameraCalibration& c = camera.calibration();
   linear_ = c.model == geometry::DistortionModel::kRadialTangential &&
             std::all_of(c.distortion.begin(), c.distortion.end(), [](double d) { return d == 0; });
   const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  rays_.resize(3 * n);
-  lod_offset_.resize(n);
+  // 8 spare values: the vector shader reads whole groups of 8 pixels.
+  for (auto* v : {&ray_x_, &ray_y_, &ray_z_, &lod_offset_})
+    v->assign(n + 8, 0.0f);
   x_min_ = y_min_ = std::numeric_limits<double>::infinity();
   x_max_ = y_max_ = -x_min_;
   std::vector<Eigen::Vector3d> row_rays(static_cast<size_t>(width_ + 1));
@@ -91,8 +83,9 @@ Renderer::Renderer(const geometry::CameraModel& camera)
       }
       const size_t i =
           static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
-      for (int k = 0; k < 3; ++k)
-        rays_[3 * i + static_cast<size_t>(k)] = static_cast<float>(r[k]);
+      ray_x_[i] = static_cast<float>(r.x());
+      ray_y_[i] = static_cast<float>(r.y());
+      ray_z_[i] = static_cast<float>(r.z());
       const double alpha = std::max((row_rays[static_cast<size_t>(x) + 1] - r).norm(),
                                     (next_rays[static_cast<size_t>(x)] - r).norm());
       // The linear path uses r / r.z, whose length is 1 / r.z.
@@ -121,6 +114,10 @@ Renderer::Renderer(const geometry::CameraModel& camera)
   span_hi_.resize(static_cast<size_t>(height_));
 }
 
+void Renderer::setVectorised(bool vectorised) {
+  vectorised_ = vectorised && detail::vectorShadingAvailable();
+}
+
 cv::Mat Renderer::range() const {
   if (!linear_) return depth_.clone();
   cv::Mat range(height_, width_, CV_32F);
@@ -134,9 +131,8 @@ cv::Mat Renderer::range() const {
 }
 
 Eigen::Vector3f Renderer::ray(int x, int y) const {
-  const size_t i =
-      3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x));
-  return Eigen::Vector3f(rays_[i], rays_[i + 1], rays_[i + 2]);
+  const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+  return Eigen::Vector3f(ray_x_[i], ray_y_[i], ray_z_[i]);
 }
 
 bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix3d& R,
@@ -287,11 +283,28 @@ bool Renderer::computeSpans(const Prepared& surface, int& row_begin, int& row_en
 void Renderer::rasterise(const Prepared& ps, const Scene& scene, cv::Mat& image) {
   int row_begin = 0, row_end = height_;
   const bool bounded = computeSpans(ps, row_begin, row_end);
-  const Texture& texture = scene.texture(ps.surface->texture);
-  const float gain = ps.surface->gain;
-  const Eigen::Vector2f t0 = ps.surface->texel_origin.cast<float>();
-  const Eigen::Matrix2f A = ps.surface->texel_axes.cast<float>();
-  const float limit = 1.0f + kInsideTolerance;
+  detail::Span span;
+  for (int k = 0; k < 3; ++k) {
+    span.n[k] = ps.n[k];
+    span.g1[k] = ps.g1[k];
+    span.g2[k] = ps.g2[k];
+  }
+  span.dn = ps.dn;
+  span.g1o = ps.g1o;
+  span.g2o = ps.g2o;
+  span.lod_constant = ps.lod_constant;
+  span.gain = ps.surface->gain;
+  span.texel_origin[0] = static_cast<float>(ps.surface->texel_origin.x());
+  span.texel_origin[1] = static_cast<float>(ps.surface->texel_origin.y());
+  const Eigen::Matrix2d& A = ps.surface->texel_axes;
+  span.texel_axes[0] = static_cast<float>(A(0, 0));
+  span.texel_axes[1] = static_cast<float>(A(0, 1));
+  span.texel_axes[2] = static_cast<float>(A(1, 0));
+  span.texel_axes[3] = static_cast<float>(A(1, 1));
+  span.triangle = ps.triangle;
+  span.surface_index = ps.index;
+  span.tolerance = kInsideTolerance;
+  span.texture = &scene.texture(ps.surface->texture);
   for (int y = row_begin; y < row_end; ++y) {
     int x_begin = 0, x_end = width_;
     if (bounded) {
@@ -300,43 +313,27 @@ void Renderer::rasterise(const Prepared& ps, const Scene& scene, cv::Mat& image)
       x_begin = std::max(0, static_cast<int>(std::floor(lo)));
       x_end = std::min(width_, static_cast<int>(std::ceil(hi)) + 1);
     }
-    float* depth = depth_.ptr<float>(y);
-    int* index = index_.ptr<int>(y);
-    std::uint8_t* out = image.ptr<std::uint8_t>(y);
     const size_t row_offset = static_cast<size_t>(y) * static_cast<size_t>(width_);
-    // Everything per pixel is a function of the ray r: t = dn / (n.r), b_i = t (g_i.r) - g_i.o.
-    auto shade = [&](int x, float nr, float g1r, float g2r) {
-      const float t = ps.dn / nr;
-      if (!(t > 0.0f) || !(t < depth[x])) return;
-      const float b1 = t * g1r - ps.g1o;
-      const float b2 = t * g2r - ps.g2o;
-      if (b1 < -kInsideTolerance || b2 < -kInsideTolerance) return;
-      if (ps.triangle ? (b1 + b2 > limit) : (b1 > limit || b2 > limit)) return;
-      depth[x] = t;
-      index[x] = ps.index;
-      const float u = t0.x() + A(0, 0) * b1 + A(0, 1) * b2;
-      const float v = t0.y() + A(1, 0) * b1 + A(1, 1) * b2;
-      const size_t i = row_offset + static_cast<size_t>(x);
-      const float lod = ps.lod_constant + lod_offset_[i] - 2.0f * fastLog2(std::abs(nr));
-      const float value = texture.sample(u, v, lod) * gain + 0.5f;
-      out[x] = static_cast<std::uint8_t>(value >= 255.0f ? 255.0f : value);
-    };
-    if (linear_) {
-      // r = (x/z, y/z, 1): the dot products are affine along the row.
-      const float yn = row_y_[static_cast<size_t>(y)];
-      const float n_row = ps.n.y() * yn + ps.n.z(), g1_row = ps.g1.y() * yn + ps.g1.z();
-      const float g2_row = ps.g2.y() * yn + ps.g2.z();
-      for (int x = x_begin; x < x_end; ++x) {
-        const float xn = column_x_[static_cast<size_t>(x)];
-        shade(x, n_row + ps.n.x() * xn, g1_row + ps.g1.x() * xn, g2_row + ps.g2.x() * xn);
-      }
+    span.x_begin = x_begin;
+    span.x_end = x_end;
+    span.depth = depth_.ptr<float>(y);
+    span.index = index_.ptr<int>(y);
+    span.out = image.ptr<std::uint8_t>(y);
+    span.lod_offset = &lod_offset_[row_offset];
+    if (linear_) {  // r = (x/z, y/z, 1)
+      span.rx = column_x_.data();
+      span.ry = nullptr;
+      span.rz = nullptr;
+      span.ry_value = row_y_[static_cast<size_t>(y)];
     } else {
-      for (int x = x_begin; x < x_end; ++x) {
-        const float* r = &rays_[3 * (row_offset + static_cast<size_t>(x))];
-        shade(x, ps.n.x() * r[0] + ps.n.y() * r[1] + ps.n.z() * r[2],
-              ps.g1.x() * r[0] + ps.g1.y() * r[1] + ps.g1.z() * r[2],
-              ps.g2.x() * r[0] + ps.g2.y() * r[1] + ps.g2.z() * r[2]);
-      }
+      span.rx = &ray_x_[row_offset];
+      span.ry = &ray_y_[row_offset];
+      span.rz = &ray_z_[row_offset];
+    }
+    if (vectorised_) {
+      detail::shadeSpanVector(span);
+    } else {
+      detail::shadeSpanScalar(span);
     }
   }
 }
@@ -369,8 +366,9 @@ void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::
     std::uint8_t* out = image.ptr<std::uint8_t>(y);
     for (int x = 0; x < width_; ++x) {
       if (index[x] >= 0) continue;
-      const float* r = &rays_[3 * (static_cast<size_t>(y) * static_cast<size_t>(width_) +
-                                   static_cast<size_t>(x))];
+      const size_t i =
+          static_cast<size_t>(y) * static_cast<size_t>(width_) + static_cast<size_t>(x);
+      const float r[3] = {ray_x_[i], ray_y_[i], ray_z_[i]};
       const float level = background.level(up.x() * r[0] + up.y() * r[1] + up.z() * r[2]);
       out[x] = static_cast<std::uint8_t>(std::clamp(level + 0.5f, 0.0f, 255.0f));
     }

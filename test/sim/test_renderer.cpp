@@ -207,6 +207,28 @@ TEST(Renderer, OcclusionKeepsTheNearerSurface) {
   EXPECT_EQ(image.at<uchar>(camera->height() / 2, camera->width() / 2 + 100), 50);
 }
 
+TEST(Renderer, VectorAndScalarShadingGiveTheSameImages) {
+  for (const auto& [scene_name, distortion] : std::vector<std::pair<std::string, std::string>>{
+           {"office_orbit", "none"}, {"sphere_flyover", "radtan"}}) {
+    const Scenario scenario = makeScenario(scene_name, 2);
+    SequenceParams params;
+    params.distortion = distortion;
+    const auto camera =
+        geometry::makeCameraModel(sequenceCalibration(params, scenario.horizontal_fov_deg));
+    Renderer renderer(*camera);
+    if (!renderer.vectorised()) GTEST_SKIP() << "no AVX2 on this processor";
+    const geometry::SE3 T_cam_world = scenario.T_world_cam(3.0).inverse();
+    cv::Mat vector_image, scalar_image;
+    renderer.render(scenario.scene, T_cam_world, vector_image);
+    const cv::Mat vector_index = renderer.surfaceIndex().clone();
+    renderer.setVectorised(false);
+    renderer.render(scenario.scene, T_cam_world, scalar_image);
+    SCOPED_TRACE(scene_name);
+    EXPECT_LE(cv::norm(vector_image, scalar_image, cv::NORM_INF), 1.0);
+    EXPECT_LT(cv::countNonZero(vector_index != renderer.surfaceIndex()), 20);
+  }
+}
+
 TEST(Renderer, RefusesCamerasWiderThanAHalfSphere) {
   SequenceParams params;
   params.distortion = "fisheye";

@@ -34,6 +34,10 @@ class Renderer {
   /// hit (CV_32F), and the index of the surface seen per pixel, -1 for the background (CV_32S).
   cv::Mat range() const;
   const cv::Mat& surfaceIndex() const { return index_; }
+  /// Shade 8 pixels at a time with AVX2 (default where the processor has it) or one at a time;
+  /// both give the same images up to float rounding.
+  void setVectorised(bool vectorised);
+  bool vectorised() const { return vectorised_; }
   /// The unit ray (camera frame) through the centre of pixel (x, y).
   Eigen::Vector3f ray(int x, int y) const;
 
@@ -50,9 +54,10 @@ class Renderer {
 
   std::unique_ptr<geometry::CameraModel> camera_;  ///< Own copy of the model.
   bool linear_;                                    ///< No distortion: project with K alone.
+  bool vectorised_;                                ///< Shade with AVX2 (span_shader.h).
   int width_, height_;
-  std::vector<float> rays_;              ///< 3 floats per pixel, unit length (distorted cameras).
-  std::vector<float> column_x_, row_y_;  ///< x/z per column, y/z per row (linear cameras).
+  std::vector<float> ray_x_, ray_y_, ray_z_;  ///< Unit ray per pixel (used by distorted cameras).
+  std::vector<float> column_x_, row_y_;       ///< x/z per column, y/z per row (linear cameras).
   /// Per pixel log2(alpha) + 2 log2|r| for the ray r the rasteriser uses (unit for distorted
   /// cameras, z = 1 for linear ones), alpha the pixel's angular size; see Prepared.
   std::vector<float> lod_offset_;
