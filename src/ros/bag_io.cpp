@@ -110,41 +110,63 @@ void SequenceBagWriter::write(std::int64_t stamp_ns, const cv::Mat& image,
   bag_->write("/tf", stamp, tf);
 }
 
-std::vector<BagImage> readBagImages(const std::string& path, const std::string& image_topic,
-                                    const std::string& camera_info_topic) {
+struct BagImageReader::State {
   rosbag::Bag bag;
+  std::string image_topic;
+  std::map<std::int64_t, geometry::CameraCalibration> calibrations;
+  std::unique_ptr<rosbag::View> view;
+  rosbag::View::iterator it;
+};
+
+BagImageReader::BagImageReader(const std::string& path, const std::string& image_topic,
+                               const std::string& camera_info_topic)
+    : state_(std::make_unique<State>()) {
   try {
-    bag.open(path, rosbag::bagmode::Read);
+    state_->bag.open(path, rosbag::bagmode::Read);
   } catch (const std::exception& e) {
     throw std::runtime_error("cannot read bag '" + path + "': " + e.what());
   }
-  std::vector<BagImage> images;
-  std::map<std::int64_t, geometry::CameraCalibration> calibrations;
-  rosbag::View view(bag,
-                    rosbag::TopicQuery(std::vector<std::string>{image_topic, camera_info_topic}));
-  for (const rosbag::MessageInstance& m : view) {
-    if (m.getTopic() == image_topic) {
-      const sensor_msgs::Image::ConstPtr msg = m.instantiate<sensor_msgs::Image>();
-      if (!msg)
-        throw std::runtime_error("topic " + image_topic + " does not hold sensor_msgs/Image");
-      BagImage image;
-      image.stamp_ns = static_cast<std::int64_t>(msg->header.stamp.toNSec());
-      image.timestamp = msg->header.stamp.toSec();
-      image.image = imageFromMessage(*msg);
-      images.push_back(std::move(image));
-    } else if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
-      calibrations[static_cast<std::int64_t>(info->header.stamp.toNSec())] =
+  state_->image_topic = image_topic;
+  for (const rosbag::MessageInstance& m :
+       rosbag::View(state_->bag, rosbag::TopicQuery(camera_info_topic))) {
+    if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
+      state_->calibrations[static_cast<std::int64_t>(info->header.stamp.toNSec())] =
           ros_conversions::calibrationFromCameraInfo(*info);
     }
   }
-  if (images.empty())
-    throw std::runtime_error("bag '" + path + "' has no images on " + image_topic);
+  state_->view = std::make_unique<rosbag::View>(state_->bag, rosbag::TopicQuery(image_topic));
+  size_ = state_->view->size();
+  if (size_ == 0) throw std::runtime_error("bag '" + path + "' has no images on " + image_topic);
+  state_->it = state_->view->begin();
+}
+
+BagImageReader::~BagImageReader() = default;
+
+bool BagImageReader::next(BagImage& image) {
+  if (state_->it == state_->view->end()) return false;
+  const sensor_msgs::Image::ConstPtr msg = state_->it->instantiate<sensor_msgs::Image>();
+  if (!msg) {
+    throw std::runtime_error("topic " + state_->image_topic + " does not hold sensor_msgs/Image");
+  }
+  ++state_->it;
+  image.stamp_ns = static_cast<std::int64_t>(msg->header.stamp.toNSec());
+  image.timestamp = msg->header.stamp.toSec();
+  image.image = imageFromMessage(*msg);
+  image.calibration.reset();
+  const auto found = state_->calibrations.upper_bound(image.stamp_ns);
+  if (found != state_->calibrations.begin()) image.calibration = std::prev(found)->second;
+  return true;
+}
+
+std::vector<BagImage> readBagImages(const std::string& path, const std::string& image_topic,
+                                    const std::string& camera_info_topic) {
+  BagImageReader reader(path, image_topic, camera_info_topic);
+  std::vector<BagImage> images;
+  BagImage image;
+  while (reader.next(image))
+    images.push_back(image);
   std::stable_sort(images.begin(), images.end(),
                    [](const BagImage& a, const BagImage& b) { return a.stamp_ns < b.stamp_ns; });
-  for (BagImage& image : images) {
-    auto it = calibrations.upper_bound(image.stamp_ns);
-    if (it != calibrations.begin()) image.calibration = std::prev(it)->second;
-  }
   return images;
 }
 

@@ -96,6 +96,19 @@ TEST(BagIo, BagAndFolderHoldTheSameFramesAndStamps) {
       ++count;
     }
     EXPECT_EQ(count, 5u);
+    // The streaming reader gives the same images one at a time.
+    BagImageReader reader(bag_path);
+    EXPECT_EQ(reader.size(), 5u);
+    BagImage streamed;
+    size_t streamed_count = 0;
+    while (reader.next(streamed)) {
+      ASSERT_LT(streamed_count, images.size());
+      EXPECT_EQ(streamed.stamp_ns, images[streamed_count].stamp_ns);
+      EXPECT_EQ(cv::norm(streamed.image, images[streamed_count].image, cv::NORM_INF), 0.0);
+      EXPECT_TRUE(streamed.calibration.has_value());
+      ++streamed_count;
+    }
+    EXPECT_EQ(streamed_count, 5u);
   }
 }
 

@@ -60,9 +60,28 @@ struct BagImage {
   std::optional<geometry::CameraCalibration> calibration;
 };
 
-/// Reads all images of `image_topic` in stamp order, attaching the CameraInfo of
-/// `camera_info_topic` with the same stamp (or the latest before it). Throws std::runtime_error
-/// for a missing or unreadable bag, a topic with no images, or an unsupported encoding.
+/// Streams the images of one topic in bag-time order (one image in memory at a time), each with
+/// the CameraInfo of `camera_info_topic` with the same stamp (or the latest stamp before it; the
+/// CameraInfo messages, which are small, are read in a first pass). Owns the open bag.
+class BagImageReader {
+ public:
+  /// Throws std::runtime_error for a missing or unreadable bag or a topic with no images.
+  BagImageReader(const std::string& path, const std::string& image_topic = "/camera/image_raw",
+                 const std::string& camera_info_topic = "/camera/camera_info");
+  ~BagImageReader();
+  /// The number of images on the topic.
+  size_t size() const { return size_; }
+  /// The next image; false after the last. Throws std::runtime_error for a message that is not
+  /// a sensor_msgs/Image or has an unsupported encoding.
+  bool next(BagImage& image);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  size_t size_ = 0;
+};
+
+/// All images of `image_topic` in stamp order (BagImageReader, collected). Throws as it does.
 std::vector<BagImage> readBagImages(const std::string& path,
                                     const std::string& image_topic = "/camera/image_raw",
                                     const std::string& camera_info_topic = "/camera/camera_info");
