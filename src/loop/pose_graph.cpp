@@ -53,6 +53,7 @@ ceres::Solver::Options solverOptions(const PoseGraphOptions& options) {
       options.linear_solver == PoseGraphLinearSolver::kSuiteSparseCholesky ? ceres::SUITE_SPARSE
                                                                            : ceres::EIGEN_SPARSE;
   solver.max_num_iterations = options.max_iterations;
+  solver.initial_trust_region_radius = 1.0 / options.initial_damping;
   solver.function_tolerance = options.function_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
   solver.parameter_tolerance = options.parameter_tolerance;
@@ -107,6 +108,9 @@ void PoseGraphOptions::validate() const {
     }
   }
   if (num_threads < 1) throw std::invalid_argument("pose graph: num_threads must be >= 1");
+  if (!(initial_damping > 0.0) || !std::isfinite(initial_damping)) {
+    throw std::invalid_argument("pose graph: initial_damping must be finite and > 0");
+  }
 }
 
 void PoseGraph::addVertex(map::KeyframeId id, const Sim3& S_kf_world, bool fixed) {

@@ -5,10 +5,9 @@
 
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/sized_cost_function.h>
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-#include "scale_drift_slam/geometry/lie_jacobians.h"
+#include "edge_linearization.h"
 
 namespace scale_drift_slam::loop {
 namespace {
@@ -17,44 +16,6 @@ using geometry::SE3;
 using geometry::SE3T;
 using geometry::Sim3;
 using geometry::Sim3T;
-
-/// What the templates below need to know about a group beyond its own interface.
-template <typename Group>
-struct GroupTraits;
-template <>
-struct GroupTraits<Sim3> {
-  static constexpr int kTangent = 7;
-  static constexpr int kAmbient = 8;
-  template <typename T>
-  using Templated = Sim3T<T>;
-  static Eigen::Matrix<double, 7, 7> inverseLeftJacobian(const Sim3::Tangent& r) {
-    return geometry::inverseLeftJacobianSim3(r);
-  }
-  /// d t' / d delta of t' = exp(delta) applied to the translation: [-[t]x, t, I]; the scale
-  /// sigma' = sigma + delta_sigma.
-  static void translationAndScaleJacobian(const Sim3& S, double* J) {
-    Eigen::Map<Eigen::Matrix<double, 8, 7, Eigen::RowMajor>> P(J);
-    P.block<3, 3>(4, 0) = -geometry::hatSO3<double>(S.translation());
-    P.block<3, 1>(4, 3) = S.translation();
-    P.block<3, 3>(4, 4).setIdentity();
-    P(7, 3) = 1.0;
-  }
-};
-template <>
-struct GroupTraits<SE3> {
-  static constexpr int kTangent = 6;
-  static constexpr int kAmbient = 7;
-  template <typename T>
-  using Templated = SE3T<T>;
-  static Eigen::Matrix<double, 6, 6> inverseLeftJacobian(const SE3::Tangent& r) {
-    return geometry::inverseLeftJacobianSE3(r);
-  }
-  static void translationAndScaleJacobian(const SE3& T, double* J) {
-    Eigen::Map<Eigen::Matrix<double, 7, 6, Eigen::RowMajor>> P(J);
-    P.block<3, 3>(4, 0) = -geometry::hatSO3<double>(T.translation());
-    P.block<3, 3>(4, 3).setIdentity();
-  }
-};
 
 /// The vertex manifold: Plus(x, delta) = exp(delta) x. kLifted selects PlusJacobian = [I; 0]
 /// (for costs that return dr/d delta, see the header); otherwise the true derivative.
@@ -129,21 +90,6 @@ class LeftMultiplyManifold final : public ceres::Manifold {
   }
 };
 
-/// L^T of Lambda = L L^T; throws unless Lambda is finite, symmetric and positive definite.
-template <int N>
-Eigen::Matrix<double, N, N> sqrtInformation(const Eigen::Matrix<double, N, N>& information) {
-  if (!information.allFinite()) throw std::invalid_argument("information matrix is not finite");
-  const double asymmetry = (information - information.transpose()).cwiseAbs().maxCoeff();
-  if (asymmetry > 1e-9 * std::max(1.0, information.cwiseAbs().maxCoeff())) {
-    throw std::invalid_argument("information matrix is not symmetric");
-  }
-  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(information);
-  if (llt.info() != Eigen::Success || !(llt.matrixL().toDenseMatrix().diagonal().minCoeff() > 0)) {
-    throw std::invalid_argument("information matrix is not positive definite");
-  }
-  return llt.matrixU();
-}
-
 /// Edge cost with closed-form Jacobians w.r.t. the left-multiplied tangent (lifted, see header).
 template <typename Group>
 class AnalyticEdgeCost final
@@ -155,45 +101,29 @@ class AnalyticEdgeCost final
   using Matrix = Eigen::Matrix<double, kTangent, kTangent>;
 
   AnalyticEdgeCost(const Group& measurement, const Matrix& sqrt_information)
-      : measurement_(measurement),
-        measurement_adjoint_(measurement.adjoint()),
-        sqrt_information_(sqrt_information),
-        identity_information_(sqrt_information.isIdentity(0.0)) {}
+      : model_(measurement, sqrt_information) {}
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    const Group S_from = Group::fromData(parameters[0]);
-    const Group S_to = Group::fromData(parameters[1]);
-    const Group E = measurement_ * S_to * S_from.inverse();
-    const typename Group::Tangent r = E.log();
-    Eigen::Map<typename Group::Tangent> out(residuals);
-    if (identity_information_) {
-      out = r;
-    } else {
-      out = sqrt_information_ * r;
-    }
-    if (jacobians == nullptr || (jacobians[0] == nullptr && jacobians[1] == nullptr)) return true;
-    Matrix weighted_jl_inverse = GroupTraits<Group>::inverseLeftJacobian(r);
-    if (!identity_information_) weighted_jl_inverse = sqrt_information_ * weighted_jl_inverse;
+    typename Group::Tangent r;
+    Matrix J[2];
+    const bool want[2] = {jacobians != nullptr && jacobians[0] != nullptr,
+                          jacobians != nullptr && jacobians[1] != nullptr};
+    model_.linearize(Group::fromData(parameters[0]), Group::fromData(parameters[1]), &r,
+                     want[0] ? &J[0] : nullptr, want[1] ? &J[1] : nullptr);
+    Eigen::Map<typename Group::Tangent>(residuals, kTangent) = r;
     using Block = Eigen::Matrix<double, kTangent, kAmbient, Eigen::RowMajor>;
-    if (jacobians[0] != nullptr) {
-      Eigen::Map<Block> J(jacobians[0]);
-      J.template leftCols<kTangent>().noalias() = -weighted_jl_inverse * E.adjoint();
-      J.template rightCols<kAmbient - kTangent>().setZero();
-    }
-    if (jacobians[1] != nullptr) {
-      Eigen::Map<Block> J(jacobians[1]);
-      J.template leftCols<kTangent>().noalias() = weighted_jl_inverse * measurement_adjoint_;
-      J.template rightCols<kAmbient - kTangent>().setZero();
+    for (int k = 0; k < 2; ++k) {
+      if (!want[k]) continue;
+      Eigen::Map<Block> block(jacobians[k]);
+      block.template leftCols<kTangent>() = J[k];
+      block.template rightCols<kAmbient - kTangent>().setZero();
     }
     return true;
   }
 
  private:
-  Group measurement_;
-  Matrix measurement_adjoint_;
-  Matrix sqrt_information_;
-  bool identity_information_;
+  EdgeModel<Group> model_;
 };
 
 /// The same residual for Ceres autodiff (Jets through exp/log of geometry/).

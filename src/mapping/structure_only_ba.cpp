@@ -5,9 +5,6 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
-
-#include <Eigen/Cholesky>
 
 namespace scale_drift_slam::mapping {
 namespace {
@@ -15,64 +12,103 @@ namespace {
 /// A point must be this far in front of a camera (in its units) to be projected.
 constexpr double kMinDepth = 1e-9;
 
+/// A pose as plain numbers: R row-major, then t (the hot loop reads them in this order).
 struct PoseRt {
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
+  double R[9];
+  double t[3];
 };
 
 /// The kernel and the pixel scaling, fixed for one run.
 struct Kernel {
   double fx, fy;  ///< |fx|, |fy|.
   double b_sq;    ///< b^2 of the pseudo-Huber kernel.
+  double inv_b_sq;
   bool robust;
   double behind_cost;
 
-  /// rho(s) and its derivative rho'(s) (the IRLS weight).
+  /// rho(s), and its derivative rho'(s) (the IRLS weight).
   double cost(double s, double* weight) const {
     if (!robust) {
       *weight = 1.0;
       return s;
     }
-    const double root = std::sqrt(1.0 + s / b_sq);
+    const double root = std::sqrt(1.0 + s * inv_b_sq);
     *weight = 1.0 / root;
     return 2.0 * b_sq * (root - 1.0);
   }
 };
 
-/// The cost of one point, and with `H`/`g` the IRLS normal equations H dx = -g at x.
+/// The cost of one point and the IRLS normal equations H dx = -g at x (H symmetric, stored as
+/// its upper triangle h00 h01 h02 h11 h12 h22).
 struct Linearisation {
-  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  double h[6] = {0, 0, 0, 0, 0, 0};
+  double g[3] = {0, 0, 0};
   double cost = 0.0;
   int in_front = 0;
 };
 
+/// Residual e = F (pi(R x + t) - z) and its Jacobian J = F [1 0 -u; 0 1 -v] R / z, written out:
+/// this loop runs ~10^6 times per structure-only BA of the Keble map.
 Linearisation linearise(const Eigen::Vector3d& x, const StructureOnlyProblem::Observation* begin,
                         const StructureOnlyProblem::Observation* end,
                         const std::vector<PoseRt>& poses, const Kernel& kernel) {
   Linearisation lin;
+  const double x0 = x.x(), x1 = x.y(), x2 = x.z();
   for (const auto* obs = begin; obs != end; ++obs) {
     const PoseRt& pose = poses[obs->pose];
-    const Eigen::Vector3d p = pose.R * x + pose.t;
-    if (!(p.z() > kMinDepth)) {
+    const double* R = pose.R;
+    const double pz = R[6] * x0 + R[7] * x1 + R[8] * x2 + pose.t[2];
+    if (!(pz > kMinDepth)) {
       lin.cost += kernel.behind_cost;
       continue;
     }
     ++lin.in_front;
-    const double inv_z = 1.0 / p.z();
-    const double u = p.x() * inv_z, v = p.y() * inv_z;
-    const Eigen::Vector2d e(kernel.fx * (u - obs->xy.x()), kernel.fy * (v - obs->xy.y()));
+    const double px = R[0] * x0 + R[1] * x1 + R[2] * x2 + pose.t[0];
+    const double py = R[3] * x0 + R[4] * x1 + R[5] * x2 + pose.t[1];
+    const double inv_z = 1.0 / pz;
+    const double u = px * inv_z, v = py * inv_z;
+    const double ex = kernel.fx * (u - obs->xy.x()), ey = kernel.fy * (v - obs->xy.y());
     double w;
-    lin.cost += kernel.cost(e.squaredNorm(), &w);
-    // J = F d pi / d p R, d pi / d p = [1 0 -u; 0 1 -v] / z.
-    Eigen::Matrix<double, 2, 3> dpi;
-    dpi << kernel.fx * inv_z, 0.0, -kernel.fx * inv_z * u, 0.0, kernel.fy * inv_z,
-        -kernel.fy * inv_z * v;
-    const Eigen::Matrix<double, 2, 3> J = dpi * pose.R;
-    lin.H.noalias() += w * J.transpose() * J;
-    lin.g.noalias() += w * J.transpose() * e;
+    lin.cost += kernel.cost(ex * ex + ey * ey, &w);
+    const double sx = kernel.fx * inv_z, sy = kernel.fy * inv_z;
+    const double a0 = sx * (R[0] - u * R[6]), a1 = sx * (R[1] - u * R[7]),
+                 a2 = sx * (R[2] - u * R[8]);
+    const double b0 = sy * (R[3] - v * R[6]), b1 = sy * (R[4] - v * R[7]),
+                 b2 = sy * (R[5] - v * R[8]);
+    const double wa0 = w * a0, wa1 = w * a1, wa2 = w * a2;
+    const double wb0 = w * b0, wb1 = w * b1, wb2 = w * b2;
+    lin.h[0] += wa0 * a0 + wb0 * b0;
+    lin.h[1] += wa0 * a1 + wb0 * b1;
+    lin.h[2] += wa0 * a2 + wb0 * b2;
+    lin.h[3] += wa1 * a1 + wb1 * b1;
+    lin.h[4] += wa1 * a2 + wb1 * b2;
+    lin.h[5] += wa2 * a2 + wb2 * b2;
+    lin.g[0] += wa0 * ex + wb0 * ey;
+    lin.g[1] += wa1 * ex + wb1 * ey;
+    lin.g[2] += wa2 * ex + wb2 * ey;
   }
   return lin;
+}
+
+/// Solves (H + mu diag(H)) dx = -g by an LDL^T factorisation written out for 3x3; false when
+/// the damped matrix is not positive definite.
+bool solveDamped(const Linearisation& lin, double mu, Eigen::Vector3d* dx) {
+  const double scale = 1.0 + mu;
+  const double a00 = lin.h[0] * scale, a11 = lin.h[3] * scale, a22 = lin.h[5] * scale;
+  const double tiny = 1e-14 * (a00 + a11 + a22);
+  const double d0 = a00;
+  if (!(d0 > tiny)) return false;
+  const double l10 = lin.h[1] / d0, l20 = lin.h[2] / d0;
+  const double d1 = a11 - l10 * lin.h[1];
+  if (!(d1 > tiny)) return false;
+  const double l21 = (lin.h[4] - l20 * lin.h[1]) / d1;
+  const double d2 = a22 - l20 * lin.h[2] - l21 * l21 * d1;
+  if (!(d2 > tiny)) return false;
+  // L y = -g, D z = y, L^T dx = z.
+  const double y0 = -lin.g[0], y1 = -lin.g[1] - l10 * y0, y2 = -lin.g[2] - l20 * y0 - l21 * y1;
+  const double z2 = y2 / d2, z1 = y1 / d1 - l21 * z2, z0 = y0 / d0 - l10 * z1 - l20 * z2;
+  *dx = Eigen::Vector3d(z0, z1, z2);
+  return dx->allFinite();
 }
 
 struct PointOutcome {
@@ -84,7 +120,7 @@ struct PointOutcome {
 
 /// Levenberg-Marquardt on one point: (H + mu diag(H)) dx = -g, a step is taken only when it
 /// lowers the cost (then mu shrinks), otherwise mu grows and the step is retried (at most ten
-/// times per iteration).
+/// times per iteration). The linearisation of an accepted trial point is reused.
 PointOutcome refinePoint(Eigen::Vector3d& x, const StructureOnlyProblem::Observation* begin,
                          const StructureOnlyProblem::Observation* end,
                          const std::vector<PoseRt>& poses, const Kernel& kernel,
@@ -103,13 +139,9 @@ PointOutcome refinePoint(Eigen::Vector3d& x, const StructureOnlyProblem::Observa
     const double previous_cost = lin.cost;
     Eigen::Vector3d dx = Eigen::Vector3d::Zero();
     for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
-      Eigen::Matrix3d A = lin.H;
-      A.diagonal() *= 1.0 + mu;
-      const Eigen::LLT<Eigen::Matrix3d> llt(A);
-      if (llt.info() == Eigen::Success) {
-        dx = -llt.solve(lin.g);
-        Linearisation trial = linearise(x + dx, begin, end, poses, kernel);
-        if (dx.allFinite() && trial.cost < lin.cost && trial.in_front >= 2) {
+      if (solveDamped(lin, mu, &dx)) {
+        const Linearisation trial = linearise(x + dx, begin, end, poses, kernel);
+        if (trial.cost < lin.cost && trial.in_front >= 2) {
           x += dx;
           lin = trial;
           mu = std::max(mu / 3.0, 1e-12);
@@ -130,8 +162,12 @@ PointOutcome refinePoint(Eigen::Vector3d& x, const StructureOnlyProblem::Observa
 std::vector<PoseRt> posesAsMatrices(const std::vector<geometry::SE3>& T_cam_world) {
   std::vector<PoseRt> poses;
   poses.reserve(T_cam_world.size());
-  for (const geometry::SE3& T : T_cam_world)
-    poses.push_back({T.rotationMatrix(), T.translation()});
+  for (const geometry::SE3& T : T_cam_world) {
+    PoseRt pose;
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(pose.R) = T.rotationMatrix();
+    Eigen::Map<Eigen::Vector3d>(pose.t) = T.translation();
+    poses.push_back(pose);
+  }
   return poses;
 }
 
@@ -165,13 +201,18 @@ ReprojectionStats problemStats(const StructureOnlyProblem& problem,
   for (std::size_t i = 0; i < problem.points.size(); ++i) {
     for (std::size_t k = problem.first_observation[i]; k < problem.first_observation[i + 1]; ++k) {
       const auto& obs = problem.observations[k];
-      const Eigen::Vector3d p = poses[obs.pose].R * problem.points[i] + poses[obs.pose].t;
+      const PoseRt& pose = poses[obs.pose];
+      const Eigen::Vector3d p =
+          Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(pose.R) *
+              problem.points[i] +
+          Eigen::Map<const Eigen::Vector3d>(pose.t);
       if (!(p.z() > kMinDepth)) {
         ++behind;
         continue;
       }
       const Eigen::Vector2d d = p.head<2>() / p.z() - obs.xy;
-      errors.push_back(std::hypot(focal.x() * d.x(), focal.y() * d.y()));
+      errors.push_back(
+          std::sqrt(focal.x() * focal.x() * d.x() * d.x() + focal.y() * focal.y() * d.y() * d.y()));
     }
   }
   return statsOf(errors, behind);
@@ -236,8 +277,8 @@ StructureOnlyBAResult refineStructure(StructureOnlyProblem& problem,
   checkFocal(focal_length_px);
   const Eigen::Vector2d focal = focal_length_px.cwiseAbs();
   const std::vector<PoseRt> poses = posesAsMatrices(problem.T_cam_world);
-  Kernel kernel{focal.x(), focal.y(), options.huber_width_px * options.huber_width_px,
-                options.robust, 0.0};
+  const double b_sq = options.huber_width_px * options.huber_width_px;
+  Kernel kernel{focal.x(), focal.y(), b_sq, 1.0 / b_sq, options.robust, 0.0};
   double unused_weight;
   kernel.behind_cost = kernel.cost(
       options.behind_camera_residual_px * options.behind_camera_residual_px, &unused_weight);
@@ -267,60 +308,6 @@ StructureOnlyBAResult refineStructure(StructureOnlyProblem& problem,
   return result;
 }
 
-StructureOnlyBAResult refineStructure(map::Map& map, const std::vector<map::PointId>& points,
-                                      const Eigen::Vector2d& focal_length_px,
-                                      const StructureOnlyBAOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<map::PointId> ids = points;
-  if (ids.empty()) {
-    ids.reserve(map.numPoints());
-    for (const auto& entry : map.points())
-      ids.push_back(entry.first);
-    std::sort(ids.begin(), ids.end());
-  }
-  StructureOnlyProblem problem;
-  std::unordered_map<map::KeyframeId, std::size_t> pose_index;
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    pose_index.emplace(id, problem.T_cam_world.size());
-    problem.T_cam_world.push_back(keyframe.T_kf_world);
-  }
-  // Observations grouped by point: each keyframe's observation list is scanned once.
-  std::unordered_map<map::PointId, std::size_t> point_index;
-  problem.first_observation.assign(ids.size() + 1, 0);
-  for (std::size_t i = 0; i < ids.size(); ++i) {
-    if (!point_index.emplace(ids[i], i).second) {
-      throw std::invalid_argument("structure-only BA: point " + std::to_string(ids[i]) +
-                                  " listed twice");
-    }
-    problem.points.push_back(map.point(ids[i]).p_world);  // throws for an unknown id
-  }
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    for (const map::Observation& obs : keyframe.observations) {
-      const auto it = point_index.find(obs.point_id);
-      if (it != point_index.end()) ++problem.first_observation[it->second + 1];
-    }
-  }
-  for (std::size_t i = 0; i < ids.size(); ++i) {
-    problem.first_observation[i + 1] += problem.first_observation[i];
-  }
-  problem.observations.resize(problem.first_observation.back());
-  std::vector<std::size_t> fill(problem.first_observation.begin(),
-                                problem.first_observation.end() - 1);
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    for (const map::Observation& obs : keyframe.observations) {
-      const auto it = point_index.find(obs.point_id);
-      if (it != point_index.end())
-        problem.observations[fill[it->second]++] = {pose_index[id], obs.xy};
-    }
-  }
-  StructureOnlyBAResult result = refineStructure(problem, focal_length_px, options);
-  for (std::size_t i = 0; i < ids.size(); ++i)
-    map.point(ids[i]).p_world = problem.points[i];
-  map.bumpVersion();
-  result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return result;
-}
-
 ReprojectionStats reprojectionStats(const map::Map& map, const Eigen::Vector2d& focal_length_px) {
   checkFocal(focal_length_px);
   const Eigen::Vector2d focal = focal_length_px.cwiseAbs();
@@ -335,7 +322,8 @@ ReprojectionStats reprojectionStats(const map::Map& map, const Eigen::Vector2d& 
         continue;
       }
       const Eigen::Vector2d d = p.head<2>() / p.z() - obs.xy;
-      errors.push_back(std::hypot(focal.x() * d.x(), focal.y() * d.y()));
+      errors.push_back(
+          std::sqrt(focal.x() * focal.x() * d.x() * d.x() + focal.y() * focal.y() * d.y() * d.y()));
     }
   }
   return statsOf(errors, behind);

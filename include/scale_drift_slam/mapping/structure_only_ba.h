@@ -78,6 +78,12 @@ StructureOnlyBAResult refineStructure(StructureOnlyProblem& problem,
                                       const Eigen::Vector2d& focal_length_px,
                                       const StructureOnlyBAOptions& options);
 
+/// The problem of `points` (all points of the map, in increasing id order, when empty) with all
+/// their observations in the map, poses in the map's keyframe order. Throws std::out_of_range
+/// for an unknown point id and std::invalid_argument for a point listed twice.
+StructureOnlyProblem makeStructureOnlyProblem(const map::Map& map,
+                                              const std::vector<map::PointId>& points);
+
 /// Refines the positions of `points` (all points of the map when empty) against all their
 /// observations in the map; poses are fixed. `focal_length_px` = (fx, fy) turns normalised
 /// residuals into pixels (signs do not matter). Throws std::invalid_argument for invalid options,
