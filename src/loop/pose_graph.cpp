@@ -12,7 +12,6 @@
 #include <ceres/ceres.h>
 
 #include "scale_drift_slam/loop/pose_graph_residuals.h"
-#include "sparse_lm.h"
 
 namespace scale_drift_slam::loop {
 namespace {
@@ -234,11 +233,6 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   const auto start = std::chrono::steady_clock::now();
   options.validate();
   checkGauge();
-  if (options.solver == PoseGraphSolver::kSparseLM) {
-    PoseGraphResult result = optimizeWithSparseLM(vertices_, edges_, options);
-    result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return result;
-  }
   const PoseGraphMode mode = options.mode;
   const int ambient = mode == PoseGraphMode::kSim3 ? Sim3::kNumParameters : SE3::kNumParameters;
 

@@ -184,27 +184,3 @@ TEST(PoseGraph, RefusesBadInput) {
 
 }  // namespace
 }  // namespace scale_drift_slam::loop
-
-namespace scale_drift_slam::loop {
-namespace {
-
-TEST(PoseGraphPrototype, SparseLMReachesCeresOptimum) {
-  sim::DriftingPoseGraphOptions options = driftingLoop();
-  options.keyframes_per_lap = 100;
-  options.laps = 2;
-  options.loops = 4;
-  const sim::DriftingPoseGraph simulated = sim::makeDriftingPoseGraph(options);
-  for (PoseGraphMode mode : {PoseGraphMode::kSim3, PoseGraphMode::kSE3}) {
-    PoseGraphOptions ceres = modeOptions(mode), sparse = modeOptions(mode);
-    sparse.solver = PoseGraphSolver::kSparseLM;
-    const PoseGraphResult a = simulated.graph.optimize(ceres);
-    const PoseGraphResult b = simulated.graph.optimize(sparse);
-    EXPECT_NEAR(a.final_chi2, b.final_chi2, 1e-9 * a.final_chi2);
-    for (const auto& [id, S] : a.S_kf_world) {
-      EXPECT_LT((S.matrix() - b.S_kf_world.at(id).matrix()).norm(), 1e-4) << id;
-    }
-  }
-}
-
-}  // namespace
-}  // namespace scale_drift_slam::loop

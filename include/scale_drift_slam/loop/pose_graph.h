@@ -31,10 +31,6 @@ enum class EdgeKind { kConsecutive, kCovisibility, kLoop };
 enum class PoseGraphJacobians { kAnalytic, kAutoDiff };
 /// The sparse linear solver of each LM step (the normal equations' Cholesky factorisation).
 enum class PoseGraphLinearSolver { kSuiteSparseCholesky, kEigenSparseCholesky };
-/// PROTOTYPE: who runs Levenberg-Marquardt: Ceres, or a hand-written sparse LM with the same
-/// residuals, damping and step control, assembling the normal equations in blocks and
-/// factorising them with CHOLMOD (SuiteSparse) through Eigen.
-enum class PoseGraphSolver { kCeres, kSparseLM };
 
 std::string toString(PoseGraphMode mode);
 std::string toString(EdgeKind kind);
@@ -46,7 +42,6 @@ PoseGraphJacobians parsePoseGraphJacobians(const std::string& name);
 /// Solver settings of the pose-graph optimisation. The defaults run LM to full convergence.
 struct PoseGraphOptions {
   PoseGraphMode mode = PoseGraphMode::kSim3;
-  PoseGraphSolver solver = PoseGraphSolver::kCeres;
   PoseGraphJacobians jacobians = PoseGraphJacobians::kAnalytic;
   PoseGraphLinearSolver linear_solver = PoseGraphLinearSolver::kSuiteSparseCholesky;
   int max_iterations = 100;  ///< LM iterations (accepted and rejected steps).
