@@ -74,7 +74,7 @@ leftJacobian(const typename Group::Tangent& xi) {
     Matrix sum = Matrix::Identity() / 479001600.0 / 13.0;  // 1/13!
     double factorial = 479001600.0;                        // 12!
     for (int n = 12; n >= 1; --n) {                        // sum = I/n! + ad sum
-      sum = Matrix::Identity() / factorial + ad * sum;
+      sum = Matrix::Identity() / factorial + multiplyTangentMaps(ad, sum);
       factorial /= n;
     }
     return sum;
@@ -99,17 +99,19 @@ inverseLeftJacobian(const typename Group::Tangent& xi) {
   const double radius_sq = spectralRadiusSq(xi);
   if (radius_sq >= 0.25) return leftJacobian<Group>(xi).inverse();
   const Matrix ad = adOf(xi);
-  const Matrix A = ad * ad;
+  const Matrix A = multiplyTangentMaps(ad, ad);
   const Matrix I = Matrix::Identity();
   Matrix tail;
   if (radius_sq < 1e-4) {
     tail = I / 12.0 - A / 720.0;
   } else {
     tail = I / 47900160.0 - A * (691.0 / 1307674368000.0);
-    tail = I / 30240.0 + A * (I / -1209600.0 + A * tail);
-    tail = I / 12.0 + A * (I / -720.0 + A * tail);
+    tail = I / -1209600.0 + multiplyTangentMaps(A, tail);
+    tail = I / 30240.0 + multiplyTangentMaps(A, tail);
+    tail = I / -720.0 + multiplyTangentMaps(A, tail);
+    tail = I / 12.0 + multiplyTangentMaps(A, tail);
   }
-  return I - 0.5 * ad + A * tail;
+  return I - 0.5 * ad + multiplyTangentMaps(A, tail);
 }
 
 }  // namespace
@@ -131,6 +133,31 @@ Matrix7d adSim3(const Sim3::Tangent& xi) {
   ad.block<3, 1>(4, 3) = -xi.tail<3>();
   ad.block<3, 3>(4, 4) = W + Mat3<double>::Identity() * xi[3];
   return ad;
+}
+
+Matrix7d multiplyTangentMaps(const Matrix7d& X, const Matrix7d& Y) {
+  Matrix7d Z = Matrix7d::Zero();
+  const auto YA = Y.block<3, 3>(0, 0);
+  const auto XD = X.block<3, 3>(4, 4);
+  Z.block<3, 3>(0, 0).noalias() = X.block<3, 3>(0, 0) * YA;
+  Z(3, 3) = X(3, 3) * Y(3, 3);
+  Z.block<3, 3>(4, 0).noalias() = X.block<3, 3>(4, 0) * YA;
+  Z.block<3, 3>(4, 0).noalias() += XD * Y.block<3, 3>(4, 0);
+  Z.block<3, 1>(4, 3).noalias() = X.block<3, 1>(4, 3) * Y(3, 3);
+  Z.block<3, 1>(4, 3).noalias() += XD * Y.block<3, 1>(4, 3);
+  Z.block<3, 3>(4, 4).noalias() = XD * Y.block<3, 3>(4, 4);
+  return Z;
+}
+
+Matrix6d multiplyTangentMaps(const Matrix6d& X, const Matrix6d& Y) {
+  Matrix6d Z = Matrix6d::Zero();
+  const auto YA = Y.block<3, 3>(0, 0);
+  const auto XD = X.block<3, 3>(3, 3);
+  Z.block<3, 3>(0, 0).noalias() = X.block<3, 3>(0, 0) * YA;
+  Z.block<3, 3>(3, 0).noalias() = X.block<3, 3>(3, 0) * YA;
+  Z.block<3, 3>(3, 0).noalias() += XD * Y.block<3, 3>(3, 0);
+  Z.block<3, 3>(3, 3).noalias() = XD * Y.block<3, 3>(3, 3);
+  return Z;
 }
 
 Matrix6d leftJacobianSE3(const SE3::Tangent& xi) {

@@ -90,10 +90,14 @@ struct EdgeModel {
     const Tangent r = E.log();
     *residual = identity_information ? r : (sqrt_information * r).eval();
     if (J_from == nullptr && J_to == nullptr) return;
-    Matrix weighted_jl_inverse = GroupTraits<Group>::inverseLeftJacobian(r);
-    if (!identity_information) weighted_jl_inverse = sqrt_information * weighted_jl_inverse;
-    if (J_from != nullptr) J_from->noalias() = -weighted_jl_inverse * E.adjoint();
-    if (J_to != nullptr) J_to->noalias() = weighted_jl_inverse * measurement_adjoint;
+    // Jl^-1, Adj(E) and Adj(M) share the block structure of geometry::multiplyTangentMaps.
+    const Matrix jl_inverse = GroupTraits<Group>::inverseLeftJacobian(r);
+    if (J_from != nullptr) *J_from = -geometry::multiplyTangentMaps(jl_inverse, E.adjoint());
+    if (J_to != nullptr) *J_to = geometry::multiplyTangentMaps(jl_inverse, measurement_adjoint);
+    if (!identity_information) {
+      if (J_from != nullptr) *J_from = (sqrt_information * *J_from).eval();
+      if (J_to != nullptr) *J_to = (sqrt_information * *J_to).eval();
+    }
   }
 
   Group measurement;

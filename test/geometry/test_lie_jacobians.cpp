@@ -58,6 +58,23 @@ TEST(LieJacobians, AdIsTheCommutatorOfHat) {
   }
 }
 
+TEST(LieJacobians, StructuredProductEqualsTheDenseOne) {
+  std::mt19937 rng(13);
+  for (int i = 0; i < 10; ++i) {
+    const Sim3::Tangent a = randomTangent<Sim3::Tangent>(rng, 2.0, 0.7, 3.0);
+    const Sim3 S = Sim3::exp(randomTangent<Sim3::Tangent>(rng, 1.0, -0.4, 5.0));
+    for (const auto& [X, Y] : {std::pair<Matrix7d, Matrix7d>{adSim3(a), S.adjoint()},
+                               {inverseLeftJacobianSim3(a), S.adjoint()},
+                               {leftJacobianSim3(a), adSim3(a)}}) {
+      EXPECT_LT((multiplyTangentMaps(X, Y) - X * Y).norm(), 1e-12 * (X * Y).norm());
+    }
+    const SE3::Tangent b = randomTangent<SE3::Tangent>(rng, 2.0, 0.0, 3.0);
+    const SE3 T = SE3::exp(randomTangent<SE3::Tangent>(rng, 1.0, 0.0, 5.0));
+    const Matrix6d X = inverseLeftJacobianSE3(b), Y = T.adjoint();
+    EXPECT_LT((multiplyTangentMaps(X, Y) - X * Y).norm(), 1e-12 * (X * Y).norm());
+  }
+}
+
 TEST(LieJacobians, Sim3JacobiansMatchNumericDerivatives) {
   std::mt19937 rng(5);
   for (const auto& [theta, sigma] : kMagnitudes) {

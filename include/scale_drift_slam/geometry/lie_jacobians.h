@@ -23,6 +23,14 @@ Matrix6d adSE3(const SE3::Tangent& xi);
 /// ad of sim(3): [[W, 0, 0], [0, 0, 0], [U, -upsilon, W + sigma I]].
 Matrix7d adSim3(const Sim3::Tangent& xi);
 
+/// X Y for tangent-space maps with the block structure that ad(xi), Adj(S) and Jl(xi)^(+-1) share
+/// (the rotation rows depend on the rotation only, the scale row on the scale only):
+///   Sim(3): [[A, 0, 0], [0, s, 0], [C, b, D]],   SE(3): [[A, 0], [C, D]]   (3x3 blocks).
+/// Only the structurally non-zero blocks are formed: four 3x3 products instead of a full one.
+/// Entries outside the structure are taken as zero.
+Matrix7d multiplyTangentMaps(const Matrix7d& X, const Matrix7d& Y);
+Matrix6d multiplyTangentMaps(const Matrix6d& X, const Matrix6d& Y);
+
 /// Jl(xi). A power series in ad(xi) while theta^2 + sigma^2 is small, otherwise 16-point
 /// Gauss-Legendre quadrature of integral_0^1 Adj(exp(t xi)) dt (exact to ~1e-14 relative for
 /// |sigma| + theta up to ~20).
