@@ -35,7 +35,9 @@ const QuadratureRule& gaussLegendre() {
         derivative = n * (x * p - p_prev) / (x * x - 1.0);
         const double step = p / derivative;
         x -= step;
-        if (std::abs(step) < 1e-16) break;
+        if (std::abs(step) < 1e-16) {
+          break;
+        }
       }
       r.nodes[i] = 0.5 * (1.0 - x);
       r.weights[i] = 1.0 / ((1.0 - x * x) * derivative * derivative);  // 2/(...) halved
@@ -66,8 +68,8 @@ Eigen::Matrix<double, 7, 7> adOf(const Sim3::Tangent& xi) {
 template <typename Group>
 Eigen::Matrix<double, Group::Tangent::RowsAtCompileTime, Group::Tangent::RowsAtCompileTime>
 leftJacobian(const typename Group::Tangent& xi) {
-  constexpr int N = Group::Tangent::RowsAtCompileTime;
-  using Matrix = Eigen::Matrix<double, N, N>;
+  constexpr int kDim = Group::Tangent::RowsAtCompileTime;
+  using Matrix = Eigen::Matrix<double, kDim, kDim>;
   if (spectralRadiusSq(xi) < 0.25) {
     const Matrix ad = adOf(xi);
     // Horner: I + ad/2! + ad^2/3! + ... = I + ad (1/2 + ad (1/6 + ad (...))).
@@ -94,10 +96,12 @@ leftJacobian(const typename Group::Tangent& xi) {
 template <typename Group>
 Eigen::Matrix<double, Group::Tangent::RowsAtCompileTime, Group::Tangent::RowsAtCompileTime>
 inverseLeftJacobian(const typename Group::Tangent& xi) {
-  constexpr int N = Group::Tangent::RowsAtCompileTime;
-  using Matrix = Eigen::Matrix<double, N, N>;
+  constexpr int kDim = Group::Tangent::RowsAtCompileTime;
+  using Matrix = Eigen::Matrix<double, kDim, kDim>;
   const double radius_sq = spectralRadiusSq(xi);
-  if (radius_sq >= 0.25) return leftJacobian<Group>(xi).inverse();
+  if (radius_sq >= 0.25) {
+    return leftJacobian<Group>(xi).inverse();
+  }
   const Matrix ad = adOf(xi);
   const Matrix A = multiplyTangentMaps(ad, ad);
   const Matrix I = Matrix::Identity();

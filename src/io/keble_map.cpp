@@ -31,11 +31,14 @@ bool parseNumbers(std::string text, int count, double* out) {
     char* end = nullptr;
     errno = 0;
     out[i] = std::strtod(cursor, &end);
-    if (end == cursor || errno == ERANGE || !std::isfinite(out[i])) return false;
+    if (end == cursor || errno == ERANGE || !std::isfinite(out[i])) {
+      return false;
+    }
     cursor = end;
   }
-  while (*cursor == ' ' || *cursor == '\t' || *cursor == '\r')
+  while (*cursor == ' ' || *cursor == '\t' || *cursor == '\r') {
     ++cursor;
+  }
   return *cursor == '\0';
 }
 
@@ -66,8 +69,9 @@ geometry::SE3 poseFromRows(const std::string& path, int line,
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c)
+    for (int c = 0; c < 3; ++c) {
       R(r, c) = rows[r][c];
+    }
     t[r] = rows[r][3];
   }
   const double orthogonality = (R * R.transpose() - Eigen::Matrix3d::Identity()).norm();
@@ -86,7 +90,9 @@ void parseLine(const std::string& path, int line_number, const std::string& line
     case Section::kNone:
       fail(path, line_number, "data before the first section name");
     case Section::kPoses: {
-      if (!parseNumbers(line, 4, v)) fail(path, line_number, "expected 4 numbers (r r r t)");
+      if (!parseNumbers(line, 4, v)) {
+        fail(path, line_number, "expected 4 numbers (r r r t)");
+      }
       pose_rows.push_back({v[0], v[1], v[2], v[3]});
       if (pose_rows.size() == 3) {
         raw.poses.push_back(poseFromRows(path, line_number, pose_rows));
@@ -95,8 +101,12 @@ void parseLine(const std::string& path, int line_number, const std::string& line
       return;
     }
     case Section::kScale:
-      if (raw.scale || !parseNumbers(line, 1, v)) fail(path, line_number, "expected one scale");
-      if (!(v[0] > 0.0)) fail(path, line_number, "the loop scale must be > 0");
+      if (raw.scale || !parseNumbers(line, 1, v)) {
+        fail(path, line_number, "expected one scale");
+      }
+      if (!(v[0] > 0.0)) {
+        fail(path, line_number, "the loop scale must be > 0");
+      }
       raw.scale = v[0];
       raw.scale_line = line_number;
       return;
@@ -108,7 +118,9 @@ void parseLine(const std::string& path, int line_number, const std::string& line
       raw.loop_line = line_number;
       return;
     case Section::kPoints:
-      if (!parseNumbers(line, 3, v)) fail(path, line_number, "expected 3 numbers (x y z)");
+      if (!parseNumbers(line, 3, v)) {
+        fail(path, line_number, "expected 3 numbers (x y z)");
+      }
       raw.points.emplace_back(v[0], v[1], v[2]);
       return;
     case Section::kObs:
@@ -123,7 +135,9 @@ void parseLine(const std::string& path, int line_number, const std::string& line
 
 RawKeble readRaw(const std::string& path) {
   std::ifstream file(path);
-  if (!file) fail(path, 0, "cannot open the file");
+  if (!file) {
+    fail(path, 0, "cannot open the file");
+  }
   RawKeble raw;
   Section section = Section::kNone;
   std::vector<std::array<double, 4>> pose_rows;
@@ -132,7 +146,9 @@ RawKeble readRaw(const std::string& path) {
   while (std::getline(file, line)) {
     ++line_number;
     const std::size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos) continue;
+    if (first == std::string::npos) {
+      continue;
+    }
     const std::string word = line.substr(first, line.find_last_not_of(" \t\r") - first + 1);
     const Section next = word == "Poses"    ? Section::kPoses
                          : word == "Scale"  ? Section::kScale
@@ -141,14 +157,20 @@ RawKeble readRaw(const std::string& path) {
                          : word == "Obs"    ? Section::kObs
                                             : Section::kNone;
     if (next != Section::kNone) {
-      if (!pose_rows.empty()) fail(path, line_number, "a pose block has fewer than 3 rows");
+      if (!pose_rows.empty()) {
+        fail(path, line_number, "a pose block has fewer than 3 rows");
+      }
       section = next;
       continue;
     }
     parseLine(path, line_number, line, section, raw, pose_rows);
   }
-  if (file.bad()) fail(path, line_number, "read error");
-  if (!pose_rows.empty()) fail(path, line_number, "a pose block has fewer than 3 rows");
+  if (file.bad()) {
+    fail(path, line_number, "read error");
+  }
+  if (!pose_rows.empty()) {
+    fail(path, line_number, "a pose block has fewer than 3 rows");
+  }
   return raw;
 }
 
@@ -156,10 +178,18 @@ RawKeble readRaw(const std::string& path) {
 
 KebleMap loadKebleMap(const std::string& path, const KebleCamera& camera) {
   const RawKeble raw = readRaw(path);
-  if (raw.poses.size() < 3) fail(path, 0, "needs at least 3 poses in a 'Poses' section");
-  if (!raw.scale) fail(path, 0, "no 'Scale' section");
-  if (!raw.loop_id) fail(path, 0, "no 'LoopId' section");
-  if (raw.points.empty()) fail(path, 0, "no 'Points' section");
+  if (raw.poses.size() < 3) {
+    fail(path, 0, "needs at least 3 poses in a 'Poses' section");
+  }
+  if (!raw.scale) {
+    fail(path, 0, "no 'Scale' section");
+  }
+  if (!raw.loop_id) {
+    fail(path, 0, "no 'LoopId' section");
+  }
+  if (raw.points.empty()) {
+    fail(path, 0, "no 'Points' section");
+  }
   const std::size_t num_keyframes = raw.poses.size() - 1;  // the last pose is the current camera
   if (*raw.loop_id >= num_keyframes - 1) {
     fail(path, raw.loop_line,
@@ -182,7 +212,9 @@ KebleMap loadKebleMap(const std::string& path, const KebleCamera& camera) {
   }
   std::vector<std::vector<map::Observation>> per_keyframe(num_keyframes);
   for (const RawObservation& obs : raw.observations) {
-    if (obs.point >= raw.points.size()) fail(path, obs.line, "observation of an unknown point");
+    if (obs.point >= raw.points.size()) {
+      fail(path, obs.line, "observation of an unknown point");
+    }
     if (obs.frame >= num_keyframes) {
       fail(path, obs.line,
            "observation in pose " + std::to_string(obs.frame) + ", which is not a keyframe");

@@ -57,7 +57,9 @@ struct GroupTraits<geometry::SE3> {
 /// L^T of Lambda = L L^T; throws unless Lambda is finite, symmetric and positive definite.
 template <int N>
 Eigen::Matrix<double, N, N> sqrtInformation(const Eigen::Matrix<double, N, N>& information) {
-  if (!information.allFinite()) throw std::invalid_argument("information matrix is not finite");
+  if (!information.allFinite()) {
+    throw std::invalid_argument("information matrix is not finite");
+  }
   const double asymmetry = (information - information.transpose()).cwiseAbs().maxCoeff();
   if (asymmetry > 1e-9 * std::max(1.0, information.cwiseAbs().maxCoeff())) {
     throw std::invalid_argument("information matrix is not symmetric");
@@ -89,14 +91,24 @@ struct EdgeModel {
     const Group E = measurement * S_to * S_from.inverse();
     const Tangent r = E.log();
     *residual = identity_information ? r : (sqrt_information * r).eval();
-    if (J_from == nullptr && J_to == nullptr) return;
+    if (J_from == nullptr && J_to == nullptr) {
+      return;
+    }
     // Jl^-1, Adj(E) and Adj(M) share the block structure of geometry::multiplyTangentMaps.
     const Matrix jl_inverse = GroupTraits<Group>::inverseLeftJacobian(r);
-    if (J_from != nullptr) *J_from = -geometry::multiplyTangentMaps(jl_inverse, E.adjoint());
-    if (J_to != nullptr) *J_to = geometry::multiplyTangentMaps(jl_inverse, measurement_adjoint);
+    if (J_from != nullptr) {
+      *J_from = -geometry::multiplyTangentMaps(jl_inverse, E.adjoint());
+    }
+    if (J_to != nullptr) {
+      *J_to = geometry::multiplyTangentMaps(jl_inverse, measurement_adjoint);
+    }
     if (!identity_information) {
-      if (J_from != nullptr) *J_from = (sqrt_information * *J_from).eval();
-      if (J_to != nullptr) *J_to = (sqrt_information * *J_to).eval();
+      if (J_from != nullptr) {
+        *J_from = (sqrt_information * *J_from).eval();
+      }
+      if (J_to != nullptr) {
+        *J_to = (sqrt_information * *J_to).eval();
+      }
     }
   }
 

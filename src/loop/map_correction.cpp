@@ -23,7 +23,9 @@ MapCorrectionStats applyPoseGraphCorrection(
   // Points first: they need the reference keyframes' old poses.
   for (auto& [point_id, point] : map.points()) {
     const auto corrected = S_kf_world_corrected.find(point.reference_keyframe);
-    if (corrected == S_kf_world_corrected.end()) continue;
+    if (corrected == S_kf_world_corrected.end()) {
+      continue;
+    }
     const geometry::SE3& T_ref_world_old = map.keyframe(point.reference_keyframe).T_kf_world;
     point.p_world = corrected->second.inverse() * (T_ref_world_old * point.p_world);
     ++stats.points_moved;

@@ -40,7 +40,9 @@ void toParameters(PoseGraphMode mode, const Sim3& S, double* data) {
 }
 
 Sim3 fromParameters(PoseGraphMode mode, const double* data) {
-  if (mode == PoseGraphMode::kSim3) return Sim3::fromData(data);
+  if (mode == PoseGraphMode::kSim3) {
+    return Sim3::fromData(data);
+  }
   return Sim3(SE3::fromData(data));
 }
 
@@ -86,19 +88,29 @@ std::string toString(PoseGraphJacobians jacobians) {
 }
 
 PoseGraphMode parsePoseGraphMode(const std::string& name) {
-  if (name == "sim3") return PoseGraphMode::kSim3;
-  if (name == "se3") return PoseGraphMode::kSE3;
+  if (name == "sim3") {
+    return PoseGraphMode::kSim3;
+  }
+  if (name == "se3") {
+    return PoseGraphMode::kSE3;
+  }
   throw std::invalid_argument("unknown pose-graph mode '" + name + "' (sim3 or se3)");
 }
 
 PoseGraphJacobians parsePoseGraphJacobians(const std::string& name) {
-  if (name == "analytic") return PoseGraphJacobians::kAnalytic;
-  if (name == "autodiff") return PoseGraphJacobians::kAutoDiff;
+  if (name == "analytic") {
+    return PoseGraphJacobians::kAnalytic;
+  }
+  if (name == "autodiff") {
+    return PoseGraphJacobians::kAutoDiff;
+  }
   throw std::invalid_argument("unknown Jacobian choice '" + name + "' (analytic or autodiff)");
 }
 
 void PoseGraphOptions::validate() const {
-  if (max_iterations < 1) throw std::invalid_argument("pose graph: max_iterations must be >= 1");
+  if (max_iterations < 1) {
+    throw std::invalid_argument("pose graph: max_iterations must be >= 1");
+  }
   for (const auto& [name, value] :
        {std::pair<const char*, double>{"function_tolerance", function_tolerance},
         {"gradient_tolerance", gradient_tolerance},
@@ -107,7 +119,9 @@ void PoseGraphOptions::validate() const {
       throw std::invalid_argument(std::string("pose graph: ") + name + " must be finite and >= 0");
     }
   }
-  if (num_threads < 1) throw std::invalid_argument("pose graph: num_threads must be >= 1");
+  if (num_threads < 1) {
+    throw std::invalid_argument("pose graph: num_threads must be >= 1");
+  }
   if (!(initial_damping > 0.0) || !std::isfinite(initial_damping)) {
     throw std::invalid_argument("pose graph: initial_damping must be finite and > 0");
   }
@@ -157,22 +171,25 @@ void PoseGraph::addEdge(const PoseGraphEdge& edge) {
 
 std::size_t PoseGraph::numFixed() const {
   std::size_t count = 0;
-  for (const auto& entry : vertices_)
+  for (const auto& entry : vertices_) {
     count += entry.second.fixed ? 1 : 0;
+  }
   return count;
 }
 
 std::size_t PoseGraph::numEdges(EdgeKind kind) const {
   std::size_t count = 0;
-  for (const PoseGraphEdge& edge : edges_)
+  for (const PoseGraphEdge& edge : edges_) {
     count += edge.kind == kind ? 1 : 0;
+  }
   return count;
 }
 
 double PoseGraph::chi2(PoseGraphMode mode) const {
   std::map<map::KeyframeId, Sim3> poses;
-  for (const auto& [id, vertex] : vertices_)
+  for (const auto& [id, vertex] : vertices_) {
     poses.emplace(id, vertex.S_kf_world);
+  }
   return chi2(mode, poses);
 }
 
@@ -194,7 +211,9 @@ double PoseGraph::chi2(PoseGraphMode mode, const std::map<map::KeyframeId, Sim3>
 }
 
 void PoseGraph::checkGauge() const {
-  if (vertices_.empty()) throw std::invalid_argument("pose graph: no vertices");
+  if (vertices_.empty()) {
+    throw std::invalid_argument("pose graph: no vertices");
+  }
   if (numFixed() == 0) {
     throw std::invalid_argument(
         "pose graph: no vertex is fixed, the gauge (pose and scale of "
@@ -218,7 +237,9 @@ void PoseGraph::checkGauge() const {
     const map::KeyframeId id = queue.front();
     queue.pop_front();
     for (const map::KeyframeId next : neighbours[id]) {
-      if (reached.insert(next).second) queue.push_back(next);
+      if (reached.insert(next).second) {
+        queue.push_back(next);
+      }
     }
   }
   for (const auto& entry : vertices_) {
@@ -254,7 +275,9 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   ceres::Problem problem(problem_options);
   for (const auto& [id, vertex] : vertices_) {
     problem.AddParameterBlock(block.at(id), ambient, manifold.get());
-    if (vertex.fixed) problem.SetParameterBlockConstant(block.at(id));
+    if (vertex.fixed) {
+      problem.SetParameterBlockConstant(block.at(id));
+    }
   }
   for (const PoseGraphEdge& edge : edges_) {
     costs.push_back(makeEdgeCost(mode, options.jacobians, edge.S_from_to, edge.information));
@@ -263,14 +286,17 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
 
   ceres::Solver::Summary summary;
   ceres::Solve(solverOptions(options), &problem, &summary);
-  if (options.log_progress) std::printf("%s\n", summary.FullReport().c_str());
+  if (options.log_progress) {
+    std::printf("%s\n", summary.FullReport().c_str());
+  }
   if (!summary.IsSolutionUsable() || !std::isfinite(summary.final_cost)) {
     throw std::runtime_error("pose graph: Ceres failed: " + summary.message);
   }
 
   PoseGraphResult result;
-  for (const auto& [id, data] : block)
+  for (const auto& [id, data] : block) {
     result.S_kf_world.emplace(id, fromParameters(mode, data));
+  }
   // summary.iterations holds iteration 0 (the initial evaluation) too.
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;
   result.initial_chi2 = 2.0 * summary.initial_cost;  // Ceres minimises 0.5 |L^T r|^2

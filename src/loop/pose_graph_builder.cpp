@@ -28,11 +28,14 @@ std::map<std::pair<map::KeyframeId, map::KeyframeId>, int> sharedPoints(
   for (const auto& entry : map.points()) {
     std::set<map::KeyframeId> observers;
     for (const map::KeyframeId id : entry.second.observed_by) {
-      if (selected.count(id)) observers.insert(id);
+      if (selected.count(id)) {
+        observers.insert(id);
+      }
     }
     for (auto a = observers.begin(); a != observers.end(); ++a) {
-      for (auto b = std::next(a); b != observers.end(); ++b)
+      for (auto b = std::next(a); b != observers.end(); ++b) {
         ++shared[{*a, *b}];
+      }
     }
   }
   return shared;
@@ -56,8 +59,9 @@ PoseGraph buildPoseGraph(const map::Map& map, const std::vector<map::KeyframeId>
   options.validate();
   std::set<map::KeyframeId> selected(keyframes.begin(), keyframes.end());
   if (keyframes.empty()) {
-    for (const auto& entry : map.keyframes())
+    for (const auto& entry : map.keyframes()) {
       selected.insert(entry.first);
+    }
   }
   PoseGraph graph;
   for (const map::KeyframeId id : selected) {
@@ -85,7 +89,9 @@ PoseGraph buildPoseGraph(const map::Map& map, const std::vector<map::KeyframeId>
   }
   if (options.min_shared_points > 0) {
     for (const auto& [pair, count] : sharedPoints(map, selected)) {
-      if (count < options.min_shared_points || consecutive.count(pair)) continue;
+      if (count < options.min_shared_points || consecutive.count(pair)) {
+        continue;
+      }
       graph.addEdge(
           relativeEdge(map, pair.second, pair.first, EdgeKind::kCovisibility, options.information));
     }

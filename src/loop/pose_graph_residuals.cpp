@@ -13,9 +13,7 @@ namespace scale_drift_slam::loop {
 namespace {
 
 using geometry::SE3;
-using geometry::SE3T;
 using geometry::Sim3;
-using geometry::Sim3T;
 
 /// The vertex manifold: Plus(x, delta) = exp(delta) x. kLifted selects PlusJacobian = [I; 0]
 /// (for costs that return dr/d delta, see the header); otherwise the true derivative.
@@ -114,7 +112,9 @@ class AnalyticEdgeCost final
     Eigen::Map<typename Group::Tangent>(residuals, kTangent) = r;
     using Block = Eigen::Matrix<double, kTangent, kAmbient, Eigen::RowMajor>;
     for (int k = 0; k < 2; ++k) {
-      if (!want[k]) continue;
+      if (!want[k]) {
+        continue;
+      }
       Eigen::Map<Block> block(jacobians[k]);
       block.template leftCols<kTangent>() = J[k];
       block.template rightCols<kAmbient - kTangent>().setZero();
@@ -173,8 +173,9 @@ Eigen::Matrix<double, 6, 6> se3Information(const Matrix7d& information) {
   const int keep[6] = {0, 1, 2, 4, 5, 6};  // (omega, upsilon) of (omega, sigma, upsilon)
   Eigen::Matrix<double, 6, 6> result;
   for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c)
+    for (int c = 0; c < 6; ++c) {
       result(r, c) = information(keep[r], keep[c]);
+    }
   }
   return result;
 }
@@ -182,7 +183,9 @@ Eigen::Matrix<double, 6, 6> se3Information(const Matrix7d& information) {
 std::unique_ptr<ceres::CostFunction> makeEdgeCost(PoseGraphMode mode, PoseGraphJacobians jacobians,
                                                   const geometry::Sim3& S_from_to,
                                                   const Matrix7d& information) {
-  if (mode == PoseGraphMode::kSim3) return makeCost<Sim3>(jacobians, S_from_to, information);
+  if (mode == PoseGraphMode::kSim3) {
+    return makeCost<Sim3>(jacobians, S_from_to, information);
+  }
   return makeCost<SE3>(jacobians, dropScale(S_from_to), se3Information(information));
 }
 
@@ -190,10 +193,14 @@ std::unique_ptr<ceres::Manifold> makeVertexManifold(PoseGraphMode mode,
                                                     PoseGraphJacobians jacobians) {
   const bool lifted = jacobians == PoseGraphJacobians::kAnalytic;
   if (mode == PoseGraphMode::kSim3) {
-    if (lifted) return std::make_unique<LeftMultiplyManifold<Sim3, true>>();
+    if (lifted) {
+      return std::make_unique<LeftMultiplyManifold<Sim3, true>>();
+    }
     return std::make_unique<LeftMultiplyManifold<Sim3, false>>();
   }
-  if (lifted) return std::make_unique<LeftMultiplyManifold<SE3, true>>();
+  if (lifted) {
+    return std::make_unique<LeftMultiplyManifold<SE3, true>>();
+  }
   return std::make_unique<LeftMultiplyManifold<SE3, false>>();
 }
 

@@ -97,13 +97,19 @@ bool solveDamped(const Linearisation& lin, double mu, Eigen::Vector3d* dx) {
   const double a00 = lin.h[0] * scale, a11 = lin.h[3] * scale, a22 = lin.h[5] * scale;
   const double tiny = 1e-14 * (a00 + a11 + a22);
   const double d0 = a00;
-  if (!(d0 > tiny)) return false;
+  if (!(d0 > tiny)) {
+    return false;
+  }
   const double l10 = lin.h[1] / d0, l20 = lin.h[2] / d0;
   const double d1 = a11 - l10 * lin.h[1];
-  if (!(d1 > tiny)) return false;
+  if (!(d1 > tiny)) {
+    return false;
+  }
   const double l21 = (lin.h[4] - l20 * lin.h[1]) / d1;
   const double d2 = a22 - l20 * lin.h[2] - l21 * l21 * d1;
-  if (!(d2 > tiny)) return false;
+  if (!(d2 > tiny)) {
+    return false;
+  }
   // L y = -g, D z = y, L^T dx = z.
   const double y0 = -lin.g[0], y1 = -lin.g[1] - l10 * y0, y2 = -lin.g[2] - l20 * y0 - l21 * y1;
   const double z2 = y2 / d2, z1 = y1 / d1 - l21 * z2, z0 = y0 / d0 - l10 * z1 - l20 * z2;
@@ -151,9 +157,15 @@ PointOutcome refinePoint(Eigen::Vector3d& x, const StructureOnlyProblem::Observa
       }
       mu *= 10.0;
     }
-    if (!accepted) break;  // no step lowers the cost: a minimum at machine precision
-    if (dx.norm() < options.step_tolerance * (x.norm() + options.step_tolerance)) break;
-    if (previous_cost - lin.cost <= options.function_tolerance * previous_cost) break;
+    if (!accepted) {
+      break;  // no step lowers the cost: a minimum at machine precision
+    }
+    if (dx.norm() < options.step_tolerance * (x.norm() + options.step_tolerance)) {
+      break;
+    }
+    if (previous_cost - lin.cost <= options.function_tolerance * previous_cost) {
+      break;
+    }
   }
   outcome.final_cost = lin.cost;
   return outcome;
@@ -175,7 +187,9 @@ ReprojectionStats statsOf(std::vector<double>& errors, std::size_t behind) {
   ReprojectionStats stats;
   stats.observations = errors.size() + behind;
   stats.behind = behind;
-  if (errors.empty()) return stats;
+  if (errors.empty()) {
+    return stats;
+  }
   double sum = 0.0, sum_sq = 0.0;
   for (double e : errors) {
     sum += e;
@@ -230,7 +244,9 @@ void StructureOnlyBAOptions::validate() const {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("structure-only BA: " + what);
   };
-  if (max_iterations < 1) fail("max_iterations must be >= 1");
+  if (max_iterations < 1) {
+    fail("max_iterations must be >= 1");
+  }
   if (!(huber_width_px > 0.0) || !std::isfinite(huber_width_px)) {
     fail("huber_width_px must be finite and > 0");
   }
@@ -252,19 +268,29 @@ void StructureOnlyProblem::validate() const {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("structure-only problem: " + what);
   };
-  if (first_observation.size() != points.size() + 1) fail("first_observation needs points + 1");
+  if (first_observation.size() != points.size() + 1) {
+    fail("first_observation needs points + 1");
+  }
   if (first_observation.front() != 0 || first_observation.back() != observations.size()) {
     fail("first_observation must run from 0 to the number of observations");
   }
   for (std::size_t i = 0; i + 1 < first_observation.size(); ++i) {
-    if (first_observation[i] > first_observation[i + 1]) fail("first_observation must not fall");
+    if (first_observation[i] > first_observation[i + 1]) {
+      fail("first_observation must not fall");
+    }
   }
   for (const Observation& obs : observations) {
-    if (obs.pose >= T_cam_world.size()) fail("observation of pose " + std::to_string(obs.pose));
-    if (!obs.xy.allFinite()) fail("non-finite observation");
+    if (obs.pose >= T_cam_world.size()) {
+      fail("observation of pose " + std::to_string(obs.pose));
+    }
+    if (!obs.xy.allFinite()) {
+      fail("non-finite observation");
+    }
   }
   for (const Eigen::Vector3d& p : points) {
-    if (!p.allFinite()) fail("non-finite point");
+    if (!p.allFinite()) {
+      fail("non-finite point");
+    }
   }
 }
 

@@ -46,16 +46,32 @@ void DriftingPoseGraphOptions::validate() const {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("drifting pose graph: " + what);
   };
-  if (keyframes_per_lap < 3) fail("keyframes_per_lap must be >= 3");
-  if (laps < 1) fail("laps must be >= 1");
-  if (!(radius > 0.0) || !std::isfinite(radius)) fail("radius must be finite and > 0");
-  if (loops < 0) fail("loops must be >= 0");
-  if (laps == 1 && loops > 1) fail("one lap closes at most one loop");
-  if (laps > 1 && loops > keyframes_per_lap * (laps - 1)) fail("more loops than keyframes");
-  if (covisibility_neighbours < 0) fail("covisibility_neighbours must be >= 0");
+  if (keyframes_per_lap < 3) {
+    fail("keyframes_per_lap must be >= 3");
+  }
+  if (laps < 1) {
+    fail("laps must be >= 1");
+  }
+  if (!(radius > 0.0) || !std::isfinite(radius)) {
+    fail("radius must be finite and > 0");
+  }
+  if (loops < 0) {
+    fail("loops must be >= 0");
+  }
+  if (laps == 1 && loops > 1) {
+    fail("one lap closes at most one loop");
+  }
+  if (laps > 1 && loops > keyframes_per_lap * (laps - 1)) {
+    fail("more loops than keyframes");
+  }
+  if (covisibility_neighbours < 0) {
+    fail("covisibility_neighbours must be >= 0");
+  }
   for (double v :
        {log_scale_drift_per_keyframe, log_scale_noise, rotation_noise, translation_noise}) {
-    if (!std::isfinite(v)) fail("drift and noise parameters must be finite");
+    if (!std::isfinite(v)) {
+      fail("drift and noise parameters must be finite");
+    }
   }
   if (log_scale_noise < 0 || rotation_noise < 0 || translation_noise < 0) {
     fail("noise standard deviations must be >= 0");
@@ -72,7 +88,9 @@ DriftingPoseGraph makeDriftingPoseGraph(const DriftingPoseGraphOptions& options)
   DriftingPoseGraph out;
   double log_scale = 0.0;
   for (int i = 0; i < n; ++i) {
-    if (i > 0) log_scale += options.log_scale_drift_per_keyframe + noise(options.log_scale_noise);
+    if (i > 0) {
+      log_scale += options.log_scale_drift_per_keyframe + noise(options.log_scale_noise);
+    }
     const SE3 T = circlePose(options.radius, 2.0 * M_PI * i / options.keyframes_per_lap);
     const Sim3 V =
         Sim3(Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero(), log_scale) * Sim3(T);

@@ -13,7 +13,9 @@ using geometry::Sim3;
 std::vector<map::KeyframeId> loopKeyframes(const io::KebleMap& keble) {
   std::vector<map::KeyframeId> ids;
   for (const auto& entry : keble.map.keyframes()) {
-    if (entry.first >= keble.loop_keyframe) ids.push_back(entry.first);
+    if (entry.first >= keble.loop_keyframe) {
+      ids.push_back(entry.first);
+    }
   }
   return ids;
 }

@@ -60,8 +60,9 @@ void saveKeyframes(const std::string& path, const map::Map& map, const std::stri
 
 void savePoints(const std::string& path, const map::Map& map) {
   std::vector<map::PointId> ids;
-  for (const auto& entry : map.points())
+  for (const auto& entry : map.points()) {
     ids.push_back(entry.first);
+  }
   std::sort(ids.begin(), ids.end());
   std::ofstream file(path);
   file << "# point_id x y z (world frame)\n" << std::setprecision(10);
@@ -69,14 +70,18 @@ void savePoints(const std::string& path, const map::Map& map) {
     const Eigen::Vector3d& p = map.point(id).p_world;
     file << id << ' ' << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
   }
-  if (!file) throw std::runtime_error("cannot write '" + path + "'");
+  if (!file) {
+    throw std::runtime_error("cannot write '" + path + "'");
+  }
 }
 
 /// Camera centres in the top view: x to the right, z up (the view from above, y points down).
 std::vector<Eigen::Vector2d> topView(const std::vector<Eigen::Vector3d>& centres) {
   std::vector<Eigen::Vector2d> xz;
-  for (const Eigen::Vector3d& c : centres)
+  xz.reserve(centres.size());
+  for (const Eigen::Vector3d& c : centres) {
     xz.emplace_back(c.x(), c.z());
+  }
   return xz;
 }
 
@@ -146,7 +151,9 @@ void writeKebleExperiment(const KebleExperimentResult& result, const io::KebleMa
   savePlotFile(dir + "keble_top_view.png", result);
   std::ofstream summary(dir + "summary.json");
   summary << kebleSummary(result, keble).dump(2) << "\n";
-  if (!summary) throw std::runtime_error("cannot write '" + dir + "summary.json'");
+  if (!summary) {
+    throw std::runtime_error("cannot write '" + dir + "summary.json'");
+  }
 }
 
 }  // namespace scale_drift_slam::sim

@@ -77,8 +77,9 @@ int main(int argc, char** argv) {
     const auto it = experiments().find(name);
     if (it == experiments().end()) {
       std::string known;
-      for (const auto& entry : experiments())
+      for (const auto& entry : experiments()) {
         known += (known.empty() ? "" : ", ") + entry.first;
+      }
       throw std::invalid_argument("unknown experiment '" + name + "' (known: " + known + ")");
     }
     if (args.positional().size() > 1) {

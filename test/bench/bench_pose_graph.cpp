@@ -4,6 +4,7 @@
 // synthetic graph of 10,000 keyframes with 50 loop edges. One core. Measures, asserts nothing.
 
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <memory>
 #include <string>
@@ -107,8 +108,9 @@ double ceresStructureOnly(const sds::mapping::StructureOnlyProblem& problem,
     return cost;
   }
   ceres::Problem ceres_problem(problem_options);
-  for (std::size_t i = 0; i < points.size(); ++i)
+  for (std::size_t i = 0; i < points.size(); ++i) {
     add_point(ceres_problem, i);
+  }
   ceres::Solver::Summary summary;
   ceres::Solve(options, &ceres_problem, &summary);
   return summary.final_cost;
@@ -184,12 +186,17 @@ void benchSyntheticGraph(Report& report) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Report report("pose_graph", argc, argv);
-  const sds::io::KebleMap keble =
-      sds::io::loadKebleMap(std::string(SDS_TEST_DATA_DIR) + "/keble_college/keble_college.txt");
-  const sds::loop::PoseGraph graph = sds::sim::makeKeblePoseGraph(keble, 0);
-  benchKebleGraphs(report, graph);
-  benchStructureOnly(report, keble, graph);
-  benchSyntheticGraph(report);
+  try {
+    Report report("pose_graph", argc, argv);
+    const sds::io::KebleMap keble =
+        sds::io::loadKebleMap(std::string(SDS_TEST_DATA_DIR) + "/keble_college/keble_college.txt");
+    const sds::loop::PoseGraph graph = sds::sim::makeKeblePoseGraph(keble, 0);
+    benchKebleGraphs(report, graph);
+    benchStructureOnly(report, keble, graph);
+    benchSyntheticGraph(report);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_pose_graph: %s\n", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -17,11 +17,14 @@ template <typename Tangent>
 Tangent randomTangent(std::mt19937& rng, double rotation, double scale, double translation) {
   std::normal_distribution<double> normal;
   Tangent xi;
-  for (int i = 0; i < xi.size(); ++i)
+  for (int i = 0; i < xi.size(); ++i) {
     xi[i] = normal(rng);
+  }
   xi.template head<3>() = xi.template head<3>().normalized() * rotation;
   xi.template tail<3>() = xi.template tail<3>().normalized() * translation;
-  if (xi.size() == 7) xi[3] = scale;
+  if (xi.size() == 7) {
+    xi[3] = scale;
+  }
   return xi;
 }
 

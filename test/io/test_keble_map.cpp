@@ -48,11 +48,12 @@ TEST(KebleMap, ReadsThePapersMap) {
 /// A copy of the real file with line `line_number` (1-based) replaced by `text`.
 std::string brokenCopy(const std::string& name, int line_number, const std::string& text) {
   std::ifstream in(kKeble);
-  const std::string path = std::string(SDS_TEST_OUTPUT_DIR) + "/" + name;
+  std::string path = std::string(SDS_TEST_OUTPUT_DIR) + "/" + name;
   std::ofstream out(path);
   std::string line;
-  for (int n = 1; std::getline(in, line); ++n)
+  for (int n = 1; std::getline(in, line); ++n) {
     out << (n == line_number ? text : line) << '\n';
+  }
   return path;
 }
 

@@ -50,9 +50,10 @@ DriftedMap makeDriftedMap(int keyframes, double final_scale) {
     keyframe.id = k;
     keyframe.T_kf_world = drifted.simulated.T_kf_world_estimate[k];
     for (int back = 0; back <= 1 && back <= k; ++back) {  // own points and the previous ones
-      for (int n = 0; n < 5; ++n)
+      for (int n = 0; n < 5; ++n) {
         keyframe.observations.push_back(
             {map::PointId(5 * (k - back) + n), Eigen::Vector2d::Zero()});
+      }
     }
     drifted.map.addKeyframe(keyframe);
   }
@@ -61,8 +62,9 @@ DriftedMap makeDriftedMap(int keyframes, double final_scale) {
 
 double pointRmse(const map::Map& map, const std::map<map::PointId, Eigen::Vector3d>& truth) {
   double sum = 0.0;
-  for (const auto& [id, p] : truth)
+  for (const auto& [id, p] : truth) {
     sum += (map.point(id).p_world - p).squaredNorm();
+  }
   return std::sqrt(sum / truth.size());
 }
 

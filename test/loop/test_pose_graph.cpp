@@ -40,8 +40,9 @@ TEST(PoseGraph, Sim3RecoversInjectedScaleDriftAndSE3DoesNot) {
   const sim::DriftingPoseGraph simulated = sim::makeDriftingPoseGraph(driftingLoop());
   const double rmse_before = [&] {
     std::map<map::KeyframeId, Sim3> poses;
-    for (const auto& [id, vertex] : simulated.graph.vertices())
+    for (const auto& [id, vertex] : simulated.graph.vertices()) {
       poses[id] = vertex.S_kf_world;
+    }
     return sim::centreRmse(poses, simulated.centres_true);
   }();
   const PoseGraphResult sim3 = simulated.graph.optimize(modeOptions(PoseGraphMode::kSim3));
@@ -61,8 +62,9 @@ TEST(PoseGraph, Sim3RecoversInjectedScaleDriftAndSE3DoesNot) {
   // within 1 % (the truth V_i has scale s_i).
   const double s_true = simulated.S_kf_world_true.back().scale();
   EXPECT_NEAR(sim3.S_kf_world.rbegin()->second.scale() / s_true, 1.0, 0.01) << s_true;
-  for (const auto& entry : se3.S_kf_world)
+  for (const auto& entry : se3.S_kf_world) {
     EXPECT_EQ(entry.second.logScale(), 0.0);
+  }
   // The reported chi2 is the graph's own measure of the returned poses.
   EXPECT_NEAR(sim3.final_chi2, simulated.graph.chi2(PoseGraphMode::kSim3, sim3.S_kf_world), 1e-9);
   EXPECT_NEAR(se3.final_chi2, simulated.graph.chi2(PoseGraphMode::kSE3, se3.S_kf_world), 1e-9);
@@ -89,7 +91,9 @@ TEST(PoseGraph, SeveralLoopsAtOnce) {
   EXPECT_TRUE(sim3.converged) << sim3.termination;
   // Every loop edge is closed by the Sim(3) solution.
   for (const PoseGraphEdge& edge : simulated.graph.edges()) {
-    if (edge.kind != EdgeKind::kLoop) continue;
+    if (edge.kind != EdgeKind::kLoop) {
+      continue;
+    }
     const Sim3::Tangent r = sim3EdgeResidual(edge.S_from_to, sim3.S_kf_world.at(edge.from),
                                              sim3.S_kf_world.at(edge.to));
     EXPECT_LT(r.norm(), 0.02) << edge.from << " -> " << edge.to;

@@ -21,8 +21,9 @@ using DynamicMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eige
 Sim3 randomSim3(std::mt19937& rng, double rotation, double log_scale, double translation) {
   std::normal_distribution<double> normal;
   Sim3::Tangent xi;
-  for (int i = 0; i < 7; ++i)
+  for (int i = 0; i < 7; ++i) {
     xi[i] = normal(rng);
+  }
   xi.head<3>() = xi.head<3>().normalized() * rotation;
   xi[3] = log_scale * normal(rng);
   xi.tail<3>() *= translation;
@@ -32,8 +33,9 @@ Sim3 randomSim3(std::mt19937& rng, double rotation, double log_scale, double tra
 Matrix7d randomInformation(std::mt19937& rng) {
   std::normal_distribution<double> normal;
   Matrix7d A;
-  for (int i = 0; i < 49; ++i)
+  for (int i = 0; i < 49; ++i) {
     A(i / 7, i % 7) = normal(rng);
+  }
   return A * A.transpose() + Matrix7d::Identity();
 }
 
@@ -159,8 +161,9 @@ TEST(PoseGraphResiduals, ManifoldPlusMinusAndJacobians) {
     EXPECT_LT((back - delta).norm(), 1e-12);
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(tangent);
     ASSERT_TRUE(manifold->Plus(x.data(), zero.data(), x0.data()));
-    for (int i = 0; i < ambient; ++i)
+    for (int i = 0; i < ambient; ++i) {
       EXPECT_NEAR(x0[i], x[i], 1e-15);
+    }
     DynamicMatrix plus(ambient, tangent), minus(tangent, ambient);
     ASSERT_TRUE(manifold->PlusJacobian(x.data(), plus.data()));
     ASSERT_TRUE(manifold->MinusJacobian(x.data(), minus.data()));
@@ -173,8 +176,9 @@ TEST(PoseGraphResiduals, ManifoldPlusMinusAndJacobians) {
         manifold->Plus(x.data(), d.data(), a.data());
         d[c] = -1e-7;
         manifold->Plus(x.data(), d.data(), b.data());
-        for (int r = 0; r < ambient; ++r)
+        for (int r = 0; r < ambient; ++r) {
           EXPECT_NEAR((a[r] - b[r]) / 2e-7, plus(r, c), 1e-7);
+        }
       }
     }
   }

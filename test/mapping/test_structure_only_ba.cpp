@@ -48,7 +48,9 @@ Scene makeScene(int num_points, double noise_px, double outlier_share, double st
       const Eigen::Vector3d p_cam = scene.problem.T_cam_world[c] * p;
       Eigen::Vector2d xy = p_cam.head<2>() / p_cam.z();
       xy += noise_px / kFocal * Eigen::Vector2d(normal(rng), normal(rng));
-      if (unit(rng) < outlier_share) xy += 30.0 / kFocal * Eigen::Vector2d(1.0, -1.0);
+      if (unit(rng) < outlier_share) {
+        xy += 30.0 / kFocal * Eigen::Vector2d(1.0, -1.0);
+      }
       scene.problem.observations.push_back({c, xy});
     }
     scene.problem.first_observation.push_back(scene.problem.observations.size());
