@@ -23,21 +23,29 @@ void expMoments(const T& sigma, T* moments) {
   using std::abs;
   using std::exp;
   if (abs(sigma) < T(4)) {
-    // M_k = sum_n sigma^n / (n! (n + k + 1)); 4^45/45! < 1e-28.
-    for (int k = 0; k <= 6; ++k)
+    // M_k = sum_n sigma^n / (n! (n + k + 1)); 4^45/45! < 1e-28. The sum stops once
+    // |sigma|^n / n! < 1e-20 (and n >= 5): the dropped terms, and their derivatives
+    // (n / sigma) sigma^n / n! for autodiff, are then below 1e-17 of M_k >= e^-4 / 7.
+    for (int k = 0; k <= 6; ++k) {
       moments[k] = T(0);
+    }
     T term = T(1);  // sigma^n / n!
     for (int n = 0; n < 45; ++n) {
-      for (int k = 0; k <= 6; ++k)
+      if (n >= 5 && abs(term) < T(1e-20)) {
+        break;
+      }
+      for (int k = 0; k <= 6; ++k) {
         moments[k] += term / T(n + k + 1);
+      }
       term = term * sigma / T(n + 1);
     }
     return;
   }
   const T e = exp(sigma);
   moments[0] = (e - T(1)) / sigma;
-  for (int k = 1; k <= 6; ++k)
+  for (int k = 1; k <= 6; ++k) {
     moments[k] = (e - T(k) * moments[k - 1]) / sigma;
+  }
 }
 
 /// The coefficients (a, b, c) of W for the rotation vector omega and the log-scale sigma.

@@ -1,0 +1,110 @@
+#include "scale_drift_slam/loop/pose_graph_builder.h"
+
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace scale_drift_slam::loop {
+namespace {
+
+using geometry::Sim3;
+
+PoseGraphEdge relativeEdge(const map::Map& map, map::KeyframeId newer, map::KeyframeId older,
+                           EdgeKind kind, const Matrix7d& information) {
+  PoseGraphEdge edge;
+  edge.from = newer;
+  edge.to = older;
+  edge.S_from_to = Sim3(map.keyframe(newer).T_kf_world * map.keyframe(older).T_kf_world.inverse());
+  edge.information = information;
+  edge.kind = kind;
+  return edge;
+}
+
+/// Number of points shared by each pair (older, newer) of selected keyframes.
+std::map<std::pair<map::KeyframeId, map::KeyframeId>, int> sharedPoints(
+    const map::Map& map, const std::set<map::KeyframeId>& selected) {
+  std::map<std::pair<map::KeyframeId, map::KeyframeId>, int> shared;
+  for (const auto& entry : map.points()) {
+    std::set<map::KeyframeId> observers;
+    for (const map::KeyframeId id : entry.second.observed_by) {
+      if (selected.count(id)) {
+        observers.insert(id);
+      }
+    }
+    for (auto a = observers.begin(); a != observers.end(); ++a) {
+      for (auto b = std::next(a); b != observers.end(); ++b) {
+        ++shared[{*a, *b}];
+      }
+    }
+  }
+  return shared;
+}
+
+}  // namespace
+
+void PoseGraphBuilderOptions::validate() const {
+  if (min_shared_points < 0) {
+    throw std::invalid_argument("pose graph builder: min_shared_points must be >= 0");
+  }
+  if (!information.allFinite()) {
+    throw std::invalid_argument("pose graph builder: information must be finite");
+  }
+}
+
+PoseGraph buildPoseGraph(const map::Map& map, const std::vector<map::KeyframeId>& keyframes,
+                         const std::vector<PoseGraphEdge>& loop_edges,
+                         const std::vector<map::KeyframeId>& fixed,
+                         const PoseGraphBuilderOptions& options) {
+  options.validate();
+  std::set<map::KeyframeId> selected(keyframes.begin(), keyframes.end());
+  if (keyframes.empty()) {
+    for (const auto& entry : map.keyframes()) {
+      selected.insert(entry.first);
+    }
+  }
+  PoseGraph graph;
+  for (const map::KeyframeId id : selected) {
+    if (!map.hasKeyframe(id)) {
+      throw std::invalid_argument("pose graph builder: keyframe " + std::to_string(id) +
+                                  " is not in the map");
+    }
+    graph.addVertex(id, Sim3(map.keyframe(id).T_kf_world));
+  }
+  for (const map::KeyframeId id : fixed) {
+    if (!selected.count(id)) {
+      throw std::invalid_argument("pose graph builder: fixed keyframe " + std::to_string(id) +
+                                  " is not in the graph");
+    }
+    graph.setFixed(id);
+  }
+  std::set<std::pair<map::KeyframeId, map::KeyframeId>> consecutive;
+  if (options.consecutive_edges) {
+    for (auto it = selected.begin(); it != selected.end() && std::next(it) != selected.end();
+         ++it) {
+      const map::KeyframeId older = *it, newer = *std::next(it);
+      graph.addEdge(relativeEdge(map, newer, older, EdgeKind::kConsecutive, options.information));
+      consecutive.insert({older, newer});
+    }
+  }
+  if (options.min_shared_points > 0) {
+    for (const auto& [pair, count] : sharedPoints(map, selected)) {
+      if (count < options.min_shared_points || consecutive.count(pair)) {
+        continue;
+      }
+      graph.addEdge(
+          relativeEdge(map, pair.second, pair.first, EdgeKind::kCovisibility, options.information));
+    }
+  }
+  for (const PoseGraphEdge& edge : loop_edges) {
+    if (!selected.count(edge.from) || !selected.count(edge.to)) {
+      throw std::invalid_argument("pose graph builder: loop edge " + std::to_string(edge.from) +
+                                  " -> " + std::to_string(edge.to) +
+                                  " joins a keyframe outside the graph");
+    }
+    graph.addEdge(edge);
+  }
+  return graph;
+}
+
+}  // namespace scale_drift_slam::loop
