@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
 
 namespace scale_drift_slam::tracking {
 
@@ -102,20 +103,22 @@ cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding) {
   return grey;
 }
 
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels) {
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
   if (grey.empty() || grey.type() != CV_8UC1) {
     throw std::invalid_argument("image pyramid needs a non-empty 8-bit grey image");
   }
   if (num_levels < 1) throw std::invalid_argument("image pyramid needs at least one level");
-  ImagePyramid pyramid;
-  pyramid.levels.push_back(grey);
-  while (pyramid.numLevels() < num_levels) {
-    const cv::Mat& last = pyramid.levels.back();
-    if (last.cols < 32 || last.rows < 32) break;
-    cv::Mat next;
-    cv::pyrDown(last, next);
-    pyramid.levels.push_back(next);
+  if (padding < 1) throw std::invalid_argument("image pyramid needs a padding of at least 1");
+  int max_level = 0;
+  for (int w = grey.cols, h = grey.rows; max_level + 1 < num_levels && w >= 32 && h >= 32;
+       w /= 2, h /= 2) {
+    ++max_level;
   }
+  ImagePyramid pyramid;
+  // cv::buildOpticalFlowPyramid halves with cv::pyrDown and pads every level by `padding`
+  // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
+  cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
+                              cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
   return pyramid;
 }
 

@@ -34,3 +34,51 @@ inline cv::Mat texturedImage(int width, int height, unsigned seed) {
 }
 
 }  // namespace scale_drift_slam::tracking::test
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scale_drift_slam/geometry/se3.h"
+
+namespace scale_drift_slam::tracking::test {
+
+/// A textured rectangle in the world: texture pixel (u, v) sits at
+/// origin + (u - w/2) * metres_per_pixel * axis_u + (v - h/2) * metres_per_pixel * axis_v.
+struct TexturedPlane {
+  cv::Mat texture;
+  Eigen::Vector3d origin;
+  Eigen::Vector3d axis_u, axis_v;  ///< Orthonormal.
+  double metres_per_pixel = 0.01;
+};
+
+/// Renders the planes (painter's order: list the far ones first) into a pinhole image with
+/// intrinsics K, through the homography K [R a_u s, R a_v s, R o' + t] of each plane.
+inline cv::Mat renderPlanes(const std::vector<TexturedPlane>& planes, const Eigen::Matrix3d& K,
+                            const geometry::SE3& T_cam_world, int width, int height) {
+  cv::Mat image(height, width, CV_8UC1, cv::Scalar(0));
+  for (const TexturedPlane& plane : planes) {
+    const Eigen::Matrix3d R = T_cam_world.rotationMatrix();
+    const double s = plane.metres_per_pixel;
+    const Eigen::Vector3d corner = plane.origin - 0.5 * plane.texture.cols * s * plane.axis_u -
+                                   0.5 * plane.texture.rows * s * plane.axis_v;
+    Eigen::Matrix3d M;
+    M.col(0) = R * plane.axis_u * s;
+    M.col(1) = R * plane.axis_v * s;
+    M.col(2) = R * corner + T_cam_world.translation();
+    const Eigen::Matrix3d H = K * M;
+    cv::Mat Hcv(3, 3, CV_64F);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c)
+        Hcv.at<double>(r, c) = H(r, c);
+    }
+    cv::Mat warped, mask;
+    cv::warpPerspective(plane.texture, warped, Hcv, image.size(), cv::INTER_LINEAR);
+    cv::warpPerspective(cv::Mat(plane.texture.size(), CV_8UC1, cv::Scalar(255)), mask, Hcv,
+                        image.size(), cv::INTER_NEAREST);
+    warped.copyTo(image, mask);
+  }
+  return image;
+}
+
+}  // namespace scale_drift_slam::tracking::test

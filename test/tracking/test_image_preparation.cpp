@@ -67,7 +67,7 @@ TEST(ImagePreparation, PyramidHalvesEachLevel) {
   EXPECT_EQ(pyramid.levels[3].cols, 80);
   EXPECT_EQ(pyramid.levels[3].rows, 60);
   // A tiny image stops early instead of producing empty levels.
-  EXPECT_EQ(buildPyramid(cv::Mat(40, 40, CV_8UC1, cv::Scalar(5)), 6).numLevels(), 2);
+  EXPECT_EQ(buildPyramid(cv::Mat(100, 100, CV_8UC1, cv::Scalar(5)), 6).numLevels(), 3);
   EXPECT_THROW(buildPyramid(cv::Mat(), 2), std::invalid_argument);
 }
 

@@ -29,16 +29,18 @@ PixelEncoding encodingOfMat(const cv::Mat& image);
 cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding);
 
 /// A grey image and its pyramid: level 0 is the image itself, each further level halves it
-/// (cv::pyrDown, Gaussian 5x5). Levels stop early when the image gets smaller than 16 pixels.
+/// (cv::pyrDown, Gaussian 5x5). Levels stop early when the image gets smaller than 32 pixels.
+/// Every level is an ROI inside a padded buffer, as cv::calcOpticalFlowPyrLK wants it.
 struct ImagePyramid {
   std::vector<cv::Mat> levels;
   const cv::Mat& base() const { return levels.front(); }
   int numLevels() const { return static_cast<int>(levels.size()); }
 };
 
-/// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1). Throws
-/// std::invalid_argument for an empty or non-grey image.
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels);
+/// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
+/// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
+/// or non-grey image.
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
 
 /// Why a frame cannot be used, or "" when it can: empty, a size other than the calibration's,
 /// or (after grey conversion) without texture (the standard deviation of the grey values below
