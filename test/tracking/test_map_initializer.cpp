@@ -48,7 +48,7 @@ struct InitRun {
 };
 
 InitRun runSequence(const std::vector<test::TexturedPlane>& planes,
-                const std::function<geometry::SE3(int)>& pose, int frames) {
+                    const std::function<geometry::SE3(int)>& pose, int frames) {
   MapInitializer initializer(camera(), InitializerParams{}, FeatureDetectionParams{});
   const Eigen::Matrix3d K = camera()->K();
   InitRun run;
@@ -60,7 +60,8 @@ InitRun runSequence(const std::vector<test::TexturedPlane>& planes,
   return run;
 }
 
-void expectMotion(const InitRun& run, const geometry::SE3& truth_first, const geometry::SE3& truth_k) {
+void expectMotion(const InitRun& run, const geometry::SE3& truth_first,
+                  const geometry::SE3& truth_k) {
   ASSERT_TRUE(run.map.has_value());
   const geometry::SE3 truth = truth_k * truth_first.inverse();
   const double rotation_error =
