@@ -31,8 +31,8 @@ Eigen::Vector2d PinholeRadTanCamera::distort(const Eigen::Vector2d& xy,
   const double x = xy.x(), y = xy.y();
   const double r2 = x * x + y * y;
   const double radial = 1.0 + r2 * (k1_ + r2 * (k2_ + r2 * k3_));
-  const Eigen::Vector2d xy_d(x * radial + 2.0 * p1_ * x * y + p2_ * (r2 + 2.0 * x * x),
-                             y * radial + p1_ * (r2 + 2.0 * y * y) + 2.0 * p2_ * x * y);
+  Eigen::Vector2d xy_d(x * radial + 2.0 * p1_ * x * y + p2_ * (r2 + 2.0 * x * x),
+                       y * radial + p1_ * (r2 + 2.0 * y * y) + 2.0 * p2_ * x * y);
   if (jacobian) {
     // d radial / d x = 2 x (k1 + 2 k2 r^2 + 3 k3 r^4), likewise for y.
     const double dradial_dr2 = k1_ + r2 * (2.0 * k2_ + 3.0 * k3_ * r2);

@@ -6,7 +6,8 @@
 
 namespace scale_drift_slam::io {
 
-CommandLine::CommandLine(int argc, const char* const* argv, std::set<std::string> boolean_flags) {
+CommandLine::CommandLine(int argc, const char* const* argv,
+                         const std::set<std::string>& boolean_flags) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {

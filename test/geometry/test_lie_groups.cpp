@@ -82,7 +82,9 @@ TEST(SE3, LogInvertsExp) {
   for (const SE3::Tangent& xi : se3Samples()) {
     const SE3 T = SE3::exp(xi);
     expectSameElement(SE3::exp(T.log()), T, 1e-12);
-    if (xi.head<3>().norm() < M_PI - 1e-6) EXPECT_LT((T.log() - xi).norm(), 1e-9) << xi.transpose();
+    if (xi.head<3>().norm() < M_PI - 1e-6) {
+      EXPECT_LT((T.log() - xi).norm(), 1e-9) << xi.transpose();
+    }
   }
 }
 

@@ -13,7 +13,7 @@ namespace scale_drift_slam::io {
 class CommandLine {
  public:
   /// `boolean_flags` take no value ("--se3"); every other "--flag" takes one.
-  CommandLine(int argc, const char* const* argv, std::set<std::string> boolean_flags = {});
+  CommandLine(int argc, const char* const* argv, const std::set<std::string>& boolean_flags = {});
 
   bool helpRequested() const { return help_; }
   const std::vector<std::string>& positional() const { return positional_; }
