@@ -42,7 +42,8 @@ int FeatureCandidates::update(const std::vector<cv::Point2f>& tracked,
     c.xy = camera.undistortToNormalized(c.px);
     const InverseDepthFilter::Update result = c.filter.update(T_cur_world, c.xy);
     if (result == InverseDepthFilter::Update::kUpdated) ++updated;
-    if (result == InverseDepthFilter::Update::kRejected && ++c.rejections >= params_.max_rejections) {
+    if (result == InverseDepthFilter::Update::kRejected &&
+        ++c.rejections >= params_.max_rejections) {
       continue;
     }
     if (kept != i) candidates_[kept] = std::move(c);
@@ -83,7 +84,8 @@ int FeatureCandidates::spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf
   const int room = std::min(params_.new_per_keyframe,
                             params_.max_candidates - static_cast<int>(candidates_.size()));
   if (room <= 0 || !(scene_depth > 0.0)) return 0;
-  for (const Candidate& c : candidates_) occupied.push_back(c.px);
+  for (const Candidate& c : candidates_)
+    occupied.push_back(c.px);
   int added = 0;
   for (const cv::KeyPoint& corner : detectSpreadCorners(image.base(), room, detection_, occupied)) {
     const Eigen::Vector2d px(corner.pt.x, corner.pt.y);
@@ -92,7 +94,11 @@ int FeatureCandidates::spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf
     const Eigen::Vector2d xy = camera.undistortToNormalized(px);
     Candidate c{InverseDepthFilter(keyframe, T_kf_world, xy, 1.0 / scene_depth, focal_length_px_,
                                    params_.filter),
-                std::move(appearance), px, xy, {{keyframe, T_kf_world, xy}}, 0};
+                std::move(appearance),
+                px,
+                xy,
+                {{keyframe, T_kf_world, xy}},
+                0};
     candidates_.push_back(std::move(c));
     ++added;
   }
@@ -104,8 +110,7 @@ void FeatureCandidates::apply(const map::MapUpdate& update) {
   for (Candidate& c : candidates_) {
     for (PromotionView& view : c.views) {
       if (update.S_new_old) {
-        view.T_kf_world =
-            (geometry::Sim3(view.T_kf_world) * update.S_new_old->inverse()).toSE3();
+        view.T_kf_world = (geometry::Sim3(view.T_kf_world) * update.S_new_old->inverse()).toSE3();
       }
       for (const auto& [id, T_kf_world] : update.keyframe_poses) {
         if (id == view.keyframe_id) view.T_kf_world = T_kf_world;

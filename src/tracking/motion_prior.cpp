@@ -48,7 +48,8 @@ MotionPrior MotionPriorEstimator::estimate(
     std::vector<unsigned char>* extra_ok) {
   std::vector<cv::Point2f> from;
   from.reserve(seeds.size() + extra_px.size());
-  for (const FlowSeed& seed : seeds) from.push_back(seed.px);
+  for (const FlowSeed& seed : seeds)
+    from.push_back(seed.px);
   from.insert(from.end(), extra_px.begin(), extra_px.end());
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
@@ -74,7 +75,8 @@ MotionPrior MotionPriorEstimator::estimate(
     return fallback(T_guess, scene_depth);
   }
   int inliers = 0;
-  for (const bool inlier : result.inlier) inliers += inlier;
+  for (const bool inlier : result.inlier)
+    inliers += inlier;
   if (inliers < params_.min_tracks) return fallback(T_guess, scene_depth);
   MotionPrior prior;
   prior.T_cur_world = result.T_cam_world;
@@ -86,8 +88,9 @@ MotionPrior MotionPriorEstimator::estimate(
       ldlt.info() == Eigen::Success
           ? Eigen::Matrix<double, 6, 6>(ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity()))
           : Eigen::Matrix<double, 6, 6>(Eigen::Matrix<double, 6, 6>::Zero());
-  prior.Sigma = Sigma * params_.flow_sigma_px * params_.flow_sigma_px +
-                diagonalSigma(params_.min_rotation_sigma, params_.min_translation_sigma * scene_depth);
+  prior.Sigma =
+      Sigma * params_.flow_sigma_px * params_.flow_sigma_px +
+      diagonalSigma(params_.min_rotation_sigma, params_.min_translation_sigma * scene_depth);
   if (!prior.Sigma.allFinite()) return fallback(T_guess, scene_depth);
   return prior;
 }

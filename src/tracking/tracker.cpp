@@ -38,8 +38,9 @@ void TrackerParams::validate() const {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
   }
   if (local_recent_keyframes < 1 || local_nearest_keyframes < 0) {
-    throw std::invalid_argument("tracker.local_recent_keyframes must be >= 1, "
-                                "local_nearest_keyframes >= 0");
+    throw std::invalid_argument(
+        "tracker.local_recent_keyframes must be >= 1, "
+        "local_nearest_keyframes >= 0");
   }
   if (keyframe_corners < 0) throw std::invalid_argument("tracker.keyframe_corners must be >= 0");
   features.validate();
@@ -65,8 +66,7 @@ std::string trackingStateName(TrackingState state) {
   return "unknown";
 }
 
-Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera,
-                 const TrackerParams& params)
+Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params)
     : camera_(std::move(camera)),
       params_(params),
       focal_(camera_ ? 0.5 * (camera_->calibration().fx + camera_->calibration().fy) : 0.0),
@@ -135,7 +135,8 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   map::KeyframeMessage first =
       makeKeyframe(initial->first_timestamp, geometry::SE3(), initial->first_image);
   map::KeyframeMessage second = makeKeyframe(timestamp, initial->T_second_first, image);
-  TrackedKeyframe first_kf{first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}};
+  TrackedKeyframe first_kf{
+      first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}};
   TrackedKeyframe second_kf{second.keyframe.id, timestamp, second.keyframe.T_kf_world, {}};
   previous_measurements_.clear();
   std::vector<Eigen::Vector2d> occupied;
@@ -161,8 +162,8 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
   previous_image_ = image;
   last_scene_depth_ = sceneDepth(initial->T_second_first);
-  candidates_.spawn(second.keyframe.id, initial->T_second_first, image, occupied,
-                    last_scene_depth_, *camera_);
+  candidates_.spawn(second.keyframe.id, initial->T_second_first, image, occupied, last_scene_depth_,
+                    *camera_);
   result->has_pose = true;
   result->T_cam_world = initial->T_second_first;
   result->num_inliers = static_cast<int>(previous_measurements_.size());

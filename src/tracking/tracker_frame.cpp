@@ -38,9 +38,9 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   result->times.flow = elapsedMs(&clock);
 
   // 2-3. Active search for the local map points around the prior.
-  const std::vector<map::PointId> ids = map_.localPoints(
-      prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
-      params_.local_nearest_keyframes, frame_index_);
+  const std::vector<map::PointId> ids =
+      map_.localPoints(prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
+                       params_.local_nearest_keyframes, frame_index_);
   std::vector<SearchPoint> search_points;
   search_points.reserve(ids.size());
   for (const map::PointId id : ids) {
@@ -69,7 +69,8 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
     input.observations.push_back({point.p_world, matches[i].xy});
     used.push_back(i);
   }
-  for (const SearchMatch& m : matches) result->num_visible += m.visible;
+  for (const SearchMatch& m : matches)
+    result->num_visible += m.visible;
   std::vector<Measurement> inliers;
   geometry::SE3 T_cam_world = prior.T_cur_world;
   if (static_cast<int>(used.size()) >= params_.min_inliers) {
@@ -77,7 +78,8 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
         mapping::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
     T_cam_world = solved.T_cam_world;
     for (std::size_t k = 0; k < used.size(); ++k) {
-      if (solved.inlier[k]) inliers.push_back({ids[used[k]], matches[used[k]].px, matches[used[k]].xy});
+      if (solved.inlier[k])
+        inliers.push_back({ids[used[k]], matches[used[k]].px, matches[used[k]].xy});
     }
   }
   result->times.motion_ba = elapsedMs(&clock);
@@ -93,7 +95,8 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
                       std::to_string(result->num_found) + " matches";
     return;
   }
-  state_ = result->num_inliers >= params_.good_inliers ? TrackingState::kGood : TrackingState::kWeak;
+  state_ =
+      result->num_inliers >= params_.good_inliers ? TrackingState::kGood : TrackingState::kWeak;
   T_before_previous_world_ = T_previous_world_;
   T_previous_world_ = T_cam_world;
   previous_measurements_ = inliers;
@@ -108,8 +111,8 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   // 6. The keyframe rule (only while tracking is good).
   if (state_ == TrackingState::kGood) {
     const KeyframeDecision decision =
-        decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(),
-                       last_scene_depth_, params_.keyframes);
+        decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
+                       params_.keyframes);
     if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
   }
   result->times.keyframe = elapsedMs(&clock);

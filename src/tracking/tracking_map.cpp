@@ -29,7 +29,8 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
       // T_kf_new = T_kf_old S^-1 as a similarity; its rigid part keeps the camera centre.
       keyframe.T_kf_world = (geometry::Sim3(keyframe.T_kf_world) * S_inv).toSE3();
     }
-    for (auto& [id, point] : points_) point.p_world = S * point.p_world;
+    for (auto& [id, point] : points_)
+      point.p_world = S * point.p_world;
   }
   for (const auto& [id, T_kf_world] : update.keyframe_poses) {
     const auto it = keyframes_.find(id);
@@ -39,7 +40,8 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
     const auto it = points_.find(id);
     if (it != points_.end()) it->second.p_world = p_world;
   }
-  for (const map::PointId id : update.removed_points) points_.erase(id);
+  for (const map::PointId id : update.removed_points)
+    points_.erase(id);
   return true;
 }
 
@@ -47,16 +49,19 @@ std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera
                                                    int num_recent, int num_nearest,
                                                    std::uint64_t frame) {
   std::vector<map::KeyframeId> chosen;
-  for (auto it = keyframes_.rbegin(); it != keyframes_.rend() && static_cast<int>(chosen.size()) < num_recent; ++it) {
+  for (auto it = keyframes_.rbegin();
+       it != keyframes_.rend() && static_cast<int>(chosen.size()) < num_recent; ++it) {
     chosen.push_back(it->first);
   }
   std::vector<std::pair<double, map::KeyframeId>> by_distance;
   for (const auto& [id, keyframe] : keyframes_) {
-    by_distance.emplace_back((keyframe.T_kf_world.inverseTranslation() - camera_centre).squaredNorm(), id);
+    by_distance.emplace_back(
+        (keyframe.T_kf_world.inverseTranslation() - camera_centre).squaredNorm(), id);
   }
   const std::size_t n = std::min<std::size_t>(num_nearest, by_distance.size());
   std::partial_sort(by_distance.begin(), by_distance.begin() + n, by_distance.end());
-  for (std::size_t i = 0; i < n; ++i) chosen.push_back(by_distance[i].second);
+  for (std::size_t i = 0; i < n; ++i)
+    chosen.push_back(by_distance[i].second);
 
   std::vector<map::PointId> selected;
   for (const map::KeyframeId id : chosen) {

@@ -35,7 +35,8 @@ TEST(MessageQueue, CarriesMessagesAcrossThreadsInOrder) {
     queue.close();
   });
   KeyframeId expected = 0;
-  while (auto message = queue.waitPop()) EXPECT_EQ(message->keyframe.id, expected++);
+  while (auto message = queue.waitPop())
+    EXPECT_EQ(message->keyframe.id, expected++);
   producer.join();
   EXPECT_EQ(expected, 200u);
 }

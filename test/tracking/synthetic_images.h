@@ -38,6 +38,7 @@ inline cv::Mat texturedImage(int width, int height, unsigned seed) {
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "scale_drift_slam/geometry/se3.h"
 
@@ -76,9 +77,46 @@ inline cv::Mat renderPlanes(const std::vector<TexturedPlane>& planes, const Eige
     cv::warpPerspective(plane.texture, warped, Hcv, image.size(), cv::INTER_LINEAR);
     cv::warpPerspective(cv::Mat(plane.texture.size(), CV_8UC1, cv::Scalar(255)), mask, Hcv,
                         image.size(), cv::INTER_NEAREST);
+    // Only where the pixel's ray meets the plane in front of the camera: n.(t d) = c, t > 0.
+    const Eigen::Vector3d n = R * plane.axis_u.cross(plane.axis_v);
+    const double c = n.dot(R * plane.origin + T_cam_world.translation());
+    const Eigen::Matrix3d K_inv = K.inverse();
+    for (int v = 0; v < height; ++v) {
+      unsigned char* row = mask.ptr<unsigned char>(v);
+      for (int u = 0; u < width; ++u) {
+        if (c * n.dot(K_inv * Eigen::Vector3d(u, v, 1.0)) <= 0.0) row[u] = 0;
+      }
+    }
     warped.copyTo(image, mask);
   }
   return image;
+}
+
+}  // namespace scale_drift_slam::tracking::test
+
+namespace scale_drift_slam::tracking::test {
+
+/// The inside of a textured box (a room): x in [-hx, hx], y in [-hy, hy] (y down), z in [-hz, hz].
+inline std::vector<TexturedPlane> boxRoom(double hx, double hy, double hz, unsigned seed) {
+  const double s = 0.006;
+  auto face = [&](Eigen::Vector3d origin, Eigen::Vector3d u, Eigen::Vector3d v, double w, double h,
+                  unsigned k) {
+    TexturedPlane p;
+    p.texture = texturedImage(static_cast<int>(w / s), static_cast<int>(h / s), seed + k);
+    p.origin = origin;
+    p.axis_u = u;
+    p.axis_v = v;
+    p.metres_per_pixel = s;
+    return p;
+  };
+  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
+                        Z = Eigen::Vector3d::UnitZ();
+  return {face(Eigen::Vector3d(0, 0, hz), X, Y, 2 * hx, 2 * hy, 0),
+          face(Eigen::Vector3d(0, 0, -hz), X, Y, 2 * hx, 2 * hy, 1),
+          face(Eigen::Vector3d(hx, 0, 0), Z, Y, 2 * hz, 2 * hy, 2),
+          face(Eigen::Vector3d(-hx, 0, 0), Z, Y, 2 * hz, 2 * hy, 3),
+          face(Eigen::Vector3d(0, hy, 0), X, Z, 2 * hx, 2 * hz, 4),
+          face(Eigen::Vector3d(0, -hy, 0), X, Z, 2 * hx, 2 * hz, 5)};
 }
 
 }  // namespace scale_drift_slam::tracking::test

@@ -24,10 +24,10 @@ namespace scale_drift_slam::tracking {
 
 struct FeatureCandidateParams {
   InverseDepthFilterParams filter;
-  int max_candidates = 300;     ///< Candidates alive at once.
-  int new_per_keyframe = 150;   ///< New candidates started at a keyframe (at most).
-  int max_rejections = 2;       ///< Drop a candidate after this many rejected updates.
-  int max_views = 4;            ///< Keyframe views kept for the promotion BA.
+  int max_candidates = 300;    ///< Candidates alive at once.
+  int new_per_keyframe = 150;  ///< New candidates started at a keyframe (at most).
+  int max_rejections = 2;      ///< Drop a candidate after this many rejected updates.
+  int max_views = 4;           ///< Keyframe views kept for the promotion BA.
   void validate() const;
 };
 

@@ -21,12 +21,12 @@ namespace scale_drift_slam::tracking {
 
 struct MotionPriorParams {
   OpticalFlowParams flow;
-  double flow_sigma_px = 0.5;          ///< Noise of a flow track (pixels).
-  int min_tracks = 12;                 ///< Fewer flow tracks: constant-velocity fallback.
-  double min_rotation_sigma = 0.002;   ///< Floor of Sigma_Delta (radians).
-  double min_translation_sigma = 0.005;///< Floor of Sigma_Delta (fraction of the scene depth).
-  double fallback_rotation_sigma = 0.05;     ///< Sigma_Delta of the fallback (radians).
-  double fallback_translation_sigma = 0.1;   ///< ...(fraction of the scene depth).
+  double flow_sigma_px = 0.5;               ///< Noise of a flow track (pixels).
+  int min_tracks = 12;                      ///< Fewer flow tracks: constant-velocity fallback.
+  double min_rotation_sigma = 0.002;        ///< Floor of Sigma_Delta (radians).
+  double min_translation_sigma = 0.005;     ///< Floor of Sigma_Delta (fraction of the scene depth).
+  double fallback_rotation_sigma = 0.05;    ///< Sigma_Delta of the fallback (radians).
+  double fallback_translation_sigma = 0.1;  ///< ...(fraction of the scene depth).
   void validate() const;
 };
 

@@ -28,12 +28,12 @@ namespace scale_drift_slam::tracking {
 
 struct TrackerParams {
   int pyramid_levels = 4;
-  double min_contrast = 3.0;     ///< Frames with a smaller grey-level std are unusable.
-  int good_inliers = 50;         ///< Inliers for "good" tracking (keyframes only then).
-  int min_inliers = 15;          ///< Below: lost.
+  double min_contrast = 3.0;        ///< Frames with a smaller grey-level std are unusable.
+  int good_inliers = 50;            ///< Inliers for "good" tracking (keyframes only then).
+  int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
   int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera.
-  int keyframe_corners = 300;    ///< Corners stored with a keyframe for place recognition.
+  int keyframe_corners = 300;       ///< Corners stored with a keyframe for place recognition.
   FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -56,8 +56,8 @@ struct StageTimes {
 struct FrameResult {
   double timestamp = 0.0;
   TrackingState state = TrackingState::kInitializing;
-  bool rejected = false;           ///< The frame itself was unusable (see message).
-  bool has_pose = false;           ///< T_cam_world is an estimate for this frame.
+  bool rejected = false;  ///< The frame itself was unusable (see message).
+  bool has_pose = false;  ///< T_cam_world is an estimate for this frame.
   geometry::SE3 T_cam_world;
   int num_visible = 0, num_found = 0, num_inliers = 0;
   std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
