@@ -22,6 +22,9 @@ struct SequenceFrame {
   double timestamp = 0.0;  ///< Seconds.
   cv::Mat image;           ///< As stored (8-bit grey or BGR, or 16-bit grey); empty if unreadable.
   std::string source;      ///< File name, for messages.
+  /// The pixel encoding when the source states it (bags: "rgb8", "mono16", ...); empty: infer
+  /// from the image type (8-bit 1/3/4 channels = mono8/bgr8/bgra8, 16-bit = mono16).
+  std::string encoding;
 };
 
 /// A sequence of frames, read lazily. Not thread-safe.
