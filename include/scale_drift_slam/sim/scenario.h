@@ -1,0 +1,39 @@
+#pragma once
+// The named synthetic sequences (stable names; tests, tools and checks rely on them): a scene, a
+// smooth camera trajectory with the exact pose at any time, and the default camera. Scenes are in
+// metres, world z up; camera frames follow the optical convention (x right, y down, z forward).
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/sim/scene.h"
+
+namespace scale_drift_slam::sim {
+
+/// A scene and the camera's path through it. Built by makeScenario(); read-only afterwards.
+struct Scenario {
+  std::string name;
+  std::string description;
+  Scene scene;
+  double duration = 0.0;            ///< Seconds covered by the trajectory.
+  double rate = 30.0;               ///< Default frame rate (Hz).
+  double horizontal_fov_deg = 80.0; ///< Default horizontal field of view of the camera.
+  /// The camera pose in the world (camera -> world) at time t in [0, duration].
+  std::function<geometry::SE3(double t)> T_world_cam;
+};
+
+/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover.
+std::vector<std::string> scenarioNames();
+/// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
+/// Throws std::invalid_argument naming the known scenes for an unknown name.
+Scenario makeScenario(const std::string& name, std::uint32_t seed);
+
+/// The camera orientation (camera -> world) looking along `forward` with the image's up as close
+/// to `up` as possible, then rolled by `roll` radians about the viewing direction.
+Eigen::Matrix3d lookRotation(const Eigen::Vector3d& forward, const Eigen::Vector3d& up,
+                             double roll = 0.0);
+
+}  // namespace scale_drift_slam::sim

@@ -1,0 +1,97 @@
+#pragma once
+// Rendered image sequences with exact ground truth: a named scenario (sim/scenario.h) seen
+// through a configurable camera, frame by frame, with the realism effects of RealismParams.
+// Deterministic: a frame depends only on the parameters (including the seed) and its index.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "scale_drift_slam/geometry/camera_calibration.h"
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/sim/renderer.h"
+#include "scale_drift_slam/sim/scenario.h"
+
+namespace scale_drift_slam::sim {
+
+/// Image degradations, each off by default except a slight optical blur.
+struct RealismParams {
+  double noise_sigma = 0.0;         ///< Gaussian pixel noise, grey levels.
+  double exposure_amplitude = 0.0;  ///< Brightness gain 1 + a sin(2 pi t / period), a in [0, 1).
+  double exposure_period = 6.0;     ///< Seconds.
+  double motion_blur = 0.0;         ///< Shutter time in seconds (0: none); the pose is mid-shutter.
+  int motion_blur_samples = 6;      ///< Renders averaged over the shutter time.
+  double optics_blur = 0.5;         ///< Gaussian blur sigma in pixels (lens softness; 0: none).
+  double blackout_start = 0.0;      ///< Seconds after the first frame.
+  double blackout_duration = 0.0;   ///< Frames in [start, start + duration) are black (0: none).
+  void validate() const;            ///< Throws std::invalid_argument with the reason.
+};
+
+/// The parameters of the sim module: what to render and through which camera.
+struct SequenceParams {
+  std::string scene = "courtyard_loop";
+  std::uint32_t seed = 1;
+  int width = 640;
+  int height = 480;
+  double rate = 0.0;                ///< Frames per second; 0: the scenario's default.
+  double horizontal_fov_deg = 0.0;  ///< 0: the scenario's default (120 for fisheye).
+  std::string distortion = "none";  ///< none, radtan (plumb_bob) or fisheye (equidistant).
+  int max_frames = 0;               ///< Render only the first frames (0: the whole trajectory).
+  bool color = false;               ///< bgr8 images instead of mono8.
+  double start_time = 1000.0;       ///< Stamp of the first frame, seconds.
+  RealismParams realism;
+  void validate() const;            ///< Throws std::invalid_argument with the reason.
+};
+
+/// One frame: its stamp (exact integer nanoseconds and the same in seconds), the true camera pose
+/// in the world at that stamp, and the image (CV_8UC1, or CV_8UC3 BGR when colour).
+struct RenderedFrame {
+  int index = 0;
+  std::int64_t stamp_ns = 0;
+  double timestamp = 0.0;
+  geometry::SE3 T_world_cam;
+  cv::Mat image;
+};
+
+/// Builds the scenario and the camera once, then renders frames on demand. Owns the scene, the
+/// camera model and a renderer; one thread at a time.
+class SequenceRenderer {
+ public:
+  /// Validates the parameters and builds the scene (throws std::invalid_argument, e.g. for an
+  /// unknown scene name).
+  explicit SequenceRenderer(const SequenceParams& params);
+
+  int frameCount() const { return frame_count_; }
+  double rate() const { return rate_; }
+  const geometry::CameraCalibration& calibration() const { return camera_->calibration(); }
+  const geometry::CameraModel& camera() const { return *camera_; }
+  const Scenario& scenario() const { return scenario_; }
+  const SequenceParams& params() const { return params_; }
+
+  /// Renders frame `index` (0 <= index < frameCount()); throws std::out_of_range otherwise.
+  RenderedFrame render(int index);
+  /// The true pose and stamp of frame `index` without rendering it.
+  RenderedFrame pose(int index) const;
+
+ private:
+  cv::Mat renderAt(double t);
+
+  SequenceParams params_;
+  Scenario scenario_;
+  std::unique_ptr<geometry::CameraModel> camera_;
+  std::unique_ptr<Renderer> renderer_;
+  double rate_ = 30.0;
+  int frame_count_ = 0;
+  double exposure_phase_ = 0.0;
+};
+
+/// The camera of a sequence: size, field of view and lens model as in SequenceParams (the
+/// focal length follows from the horizontal field of view as for an undistorted camera;
+/// radtan uses EuRoC-like coefficients, fisheye TUM-VI-like ones).
+geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
+                                                double default_fov_deg);
+
+}  // namespace scale_drift_slam::sim

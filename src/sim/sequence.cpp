@@ -1,0 +1,149 @@
+#include "scale_drift_slam/sim/sequence.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+namespace scale_drift_slam::sim {
+namespace {
+
+void require(bool condition, const std::string& reason) {
+  if (!condition) throw std::invalid_argument(reason);
+}
+
+}  // namespace
+
+void RealismParams::validate() const {
+  require(std::isfinite(noise_sigma) && noise_sigma >= 0 && noise_sigma <= 100,
+          "noise sigma must be in [0, 100] grey levels");
+  require(std::isfinite(exposure_amplitude) && exposure_amplitude >= 0 && exposure_amplitude < 1,
+          "exposure amplitude must be in [0, 1)");
+  require(std::isfinite(exposure_period) && exposure_period > 0, "exposure period must be > 0 s");
+  require(std::isfinite(motion_blur) && motion_blur >= 0 && motion_blur <= 1,
+          "motion blur (shutter time) must be in [0, 1] s");
+  require(motion_blur_samples >= 1 && motion_blur_samples <= 64,
+          "motion blur samples must be in [1, 64]");
+  require(std::isfinite(optics_blur) && optics_blur >= 0 && optics_blur <= 10,
+          "optics blur must be in [0, 10] pixels");
+  require(std::isfinite(blackout_start) && blackout_start >= 0, "blackout start must be >= 0 s");
+  require(std::isfinite(blackout_duration) && blackout_duration >= 0,
+          "blackout duration must be >= 0 s");
+}
+
+void SequenceParams::validate() const {
+  require(width >= 16 && width <= 8192 && height >= 16 && height <= 8192,
+          "image size must be between 16 and 8192 pixels");
+  require(std::isfinite(rate) && rate >= 0 && rate <= 1000, "frame rate must be in (0, 1000] Hz");
+  require(std::isfinite(horizontal_fov_deg) &&
+              (horizontal_fov_deg == 0 || (horizontal_fov_deg >= 10 && horizontal_fov_deg <= 160)),
+          "horizontal field of view must be in [10, 160] degrees");
+  require(distortion == "none" || distortion == "radtan" || distortion == "fisheye",
+          "distortion must be none, radtan or fisheye, not '" + distortion + "'");
+  require(max_frames >= 0, "the number of frames must be >= 0");
+  require(std::isfinite(start_time) && start_time >= 0 && start_time < 4e9,
+          "start time must be in [0, 4e9) s");
+  realism.validate();
+}
+
+geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
+                                                double default_fov_deg) {
+  geometry::CameraCalibration c;
+  c.width = params.width;
+  c.height = params.height;
+  c.cx = (params.width - 1) / 2.0;
+  c.cy = (params.height - 1) / 2.0;
+  double fov = params.horizontal_fov_deg > 0 ? params.horizontal_fov_deg : default_fov_deg;
+  if (params.distortion == "fisheye") {
+    if (params.horizontal_fov_deg == 0) fov = 120.0;
+    c.model = geometry::DistortionModel::kEquidistant;
+    c.fx = c.fy = (params.width / 2.0) / (0.5 * fov * M_PI / 180.0);  // r = f theta
+    c.distortion = {0.0034823, 0.000715, -0.0020532, 0.0002029};    // TUM-VI-like
+  } else {
+    c.model = geometry::DistortionModel::kRadialTangential;
+    c.fx = c.fy = (params.width / 2.0) / std::tan(0.5 * fov * M_PI / 180.0);
+    if (params.distortion == "radtan") {
+      c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};  // EuRoC cam0
+    } else {
+      c.distortion = {0.0, 0.0, 0.0, 0.0, 0.0};
+    }
+  }
+  c.validate();
+  return c;
+}
+
+SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(params) {
+  params_.validate();
+  scenario_ = makeScenario(params_.scene, params_.seed);
+  camera_ = geometry::makeCameraModel(sequenceCalibration(params_, scenario_.horizontal_fov_deg));
+  renderer_ = std::make_unique<Renderer>(*camera_);
+  rate_ = params_.rate > 0 ? params_.rate : scenario_.rate;
+  frame_count_ = static_cast<int>(std::floor(scenario_.duration * rate_ + 1e-9));
+  if (params_.max_frames > 0) frame_count_ = std::min(frame_count_, params_.max_frames);
+  cv::RNG rng(params_.seed * 7919ULL + 17);
+  exposure_phase_ = rng.uniform(0.0, 2.0 * M_PI);
+}
+
+RenderedFrame SequenceRenderer::pose(int index) const {
+  if (index < 0 || index >= frame_count_) {
+    throw std::out_of_range("frame " + std::to_string(index) + " outside [0, " +
+                            std::to_string(frame_count_) + ")");
+  }
+  RenderedFrame frame;
+  frame.index = index;
+  frame.stamp_ns = std::llround(params_.start_time * 1e9) + std::llround(index * 1e9 / rate_);
+  frame.timestamp = static_cast<double>(frame.stamp_ns) * 1e-9;
+  frame.T_world_cam = scenario_.T_world_cam(index / rate_);
+  return frame;
+}
+
+cv::Mat SequenceRenderer::renderAt(double t) {
+  cv::Mat image;
+  const geometry::SE3 T_cam_world = scenario_.T_world_cam(t).inverse();
+  if (params_.color) {
+    renderer_->renderColor(scenario_.scene, T_cam_world, image);
+  } else {
+    renderer_->render(scenario_.scene, T_cam_world, image);
+  }
+  return image;
+}
+
+RenderedFrame SequenceRenderer::render(int index) {
+  RenderedFrame frame = pose(index);
+  const RealismParams& realism = params_.realism;
+  const double t = index / rate_;
+  const int type = params_.color ? CV_8UC3 : CV_8UC1;
+  if (realism.blackout_duration > 0 && t >= realism.blackout_start &&
+      t < realism.blackout_start + realism.blackout_duration) {
+    frame.image = cv::Mat::zeros(params_.height, params_.width, type);
+  } else if (realism.motion_blur > 0 && realism.motion_blur_samples > 1) {
+    cv::Mat sum = cv::Mat::zeros(params_.height, params_.width, CV_32FC(CV_MAT_CN(type)));
+    const int n = realism.motion_blur_samples;
+    for (int k = 0; k < n; ++k) {
+      const double offset = realism.motion_blur * ((k + 0.5) / n - 0.5);
+      cv::accumulate(renderAt(std::max(0.0, t + offset)), sum);
+    }
+    sum.convertTo(frame.image, type, 1.0 / n);
+  } else {
+    frame.image = renderAt(t);
+  }
+  if (realism.optics_blur > 0) {
+    cv::GaussianBlur(frame.image, frame.image, cv::Size(0, 0), realism.optics_blur);
+  }
+  const double gain =
+      1.0 + realism.exposure_amplitude * std::sin(2 * M_PI * t / realism.exposure_period + exposure_phase_);
+  if (realism.noise_sigma > 0 || gain != 1.0) {
+    cv::Mat as_float;
+    frame.image.convertTo(as_float, CV_32F, gain);
+    if (realism.noise_sigma > 0) {
+      cv::Mat noise(as_float.size(), as_float.type());
+      cv::RNG rng(params_.seed * 1000003ULL + static_cast<std::uint64_t>(index) * 7777ULL + 1);
+      rng.fill(noise, cv::RNG::NORMAL, 0.0, realism.noise_sigma);
+      as_float += noise;
+    }
+    as_float.convertTo(frame.image, type);
+  }
+  return frame;
+}
+
+}  // namespace scale_drift_slam::sim
