@@ -45,8 +45,8 @@ calib.txt) or a rosbag (*.bag).
 std::unique_ptr<io::ImageSequence> openDataset(const io::CommandLine& args,
                                                const std::string& dataset) {
   if (fs::path(dataset).extension() == ".bag") {
-    return ros_bag::openBagImageSequence(dataset, args.text("--topic", "/camera/image_raw"),
-                                         args.text("--camera-info-topic", "/camera/camera_info"));
+    return ros_bag::openBagImageSequence(dataset, args.text("topic", "/camera/image_raw"),
+                                         args.text("camera-info-topic", "/camera/camera_info"));
   }
   return io::openImageFolder(dataset);
 }
@@ -95,18 +95,18 @@ void addTimes(const tracking::FrameResult& r, io::StageTimings* timings) {
 
 int run(const io::CommandLine& args) {
   const auto start = std::chrono::steady_clock::now();
-  args.rejectUnknownFlags({"--out", "--calib", "--config", "--topic", "--camera-info-topic",
-                           "--max-frames", "--quiet"});
+  args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic",
+                           "max-frames", "quiet"});
   const std::string dataset = args.positional(0, "DATASET");
-  const fs::path out = args.required("--out");
-  const long max_frames = args.integer("--max-frames", -1);
-  const bool quiet = args.has("--quiet");
+  const fs::path out = args.required("out");
+  const long max_frames = args.integer("max-frames", -1);
+  const bool quiet = args.has("quiet");
   const mapping::SlamParams params =
-      args.has("--config") ? io::loadSlamParams(args.required("--config")) : mapping::SlamParams{};
+      args.has("config") ? io::loadSlamParams(args.required("config")) : mapping::SlamParams{};
   std::unique_ptr<io::ImageSequence> sequence = openDataset(args, dataset);
   geometry::CameraCalibration calibration;
-  if (args.has("--calib")) {
-    calibration = io::loadCalibrationYaml(args.required("--calib"));
+  if (args.has("calib")) {
+    calibration = io::loadCalibrationYaml(args.required("calib"));
   } else if (sequence->calibration()) {
     calibration = *sequence->calibration();
   } else {
@@ -182,5 +182,5 @@ int run(const io::CommandLine& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return io::runTool(argc, argv, kUsage, {"--quiet"}, run);
+  return io::runTool(argc, argv, kUsage, {"quiet"}, run);
 }
