@@ -61,6 +61,7 @@ std::vector<Field> fieldsOf(SlamParams& p) {
       {"flow", "dis_preset", &t.motion_prior.flow.dis_preset},
       {"motion_prior", "flow_sigma_px", &t.motion_prior.flow_sigma_px},
       {"motion_prior", "min_tracks", &t.motion_prior.min_tracks},
+      {"motion_prior", "max_tracks", &t.motion_prior.max_tracks},
       {"motion_prior", "min_rotation_sigma", &t.motion_prior.min_rotation_sigma},
       {"motion_prior", "min_translation_sigma", &t.motion_prior.min_translation_sigma},
       {"motion_prior", "fallback_rotation_sigma", &t.motion_prior.fallback_rotation_sigma},

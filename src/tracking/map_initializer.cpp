@@ -20,8 +20,7 @@ void InitializerParams::validate() const {
 
 namespace {
 
-OpticalFlowParams initializerFlow() {
-  OpticalFlowParams params;
+OpticalFlowParams initializerFlow(OpticalFlowParams params) {
   params.method = FlowMethod::kLucasKanade;
   params.max_forward_backward_px = 1.0;  // initial tracks must be clean: check both ways
   return params;
@@ -31,8 +30,12 @@ OpticalFlowParams initializerFlow() {
 
 MapInitializer::MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
                                const InitializerParams& params,
-                               const FeatureDetectionParams& features)
-    : camera_(std::move(camera)), params_(params), features_(features), flow_(initializerFlow()) {
+                               const FeatureDetectionParams& features,
+                               const OpticalFlowParams& flow)
+    : camera_(std::move(camera)),
+      params_(params),
+      features_(features),
+      flow_(initializerFlow(flow)) {
   if (!camera_) throw std::invalid_argument("map initializer needs a camera model");
   params_.validate();
   features_.validate();

@@ -1,5 +1,6 @@
 #include "scale_drift_slam/tracking/motion_prior.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -10,6 +11,9 @@ void MotionPriorParams::validate() const {
   flow.validate();
   if (!(flow_sigma_px > 0.0)) throw std::invalid_argument("motion_prior.flow_sigma_px must be > 0");
   if (min_tracks < 6) throw std::invalid_argument("motion_prior.min_tracks must be >= 6");
+  if (max_tracks < min_tracks) {
+    throw std::invalid_argument("motion_prior.max_tracks must be >= motion_prior.min_tracks");
+  }
   for (const double v : {min_rotation_sigma, min_translation_sigma, fallback_rotation_sigma,
                          fallback_translation_sigma}) {
     if (!(v > 0.0)) throw std::invalid_argument("motion_prior sigmas must be > 0");
@@ -46,24 +50,29 @@ MotionPrior MotionPriorEstimator::estimate(
     const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess, double scene_depth,
     const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
     std::vector<unsigned char>* extra_ok) {
+  // An even subset of the seeds is plenty for six pose parameters and bounds the flow's cost.
+  std::vector<FlowSeed> picked;
+  const std::size_t n = std::min<std::size_t>(seeds.size(), params_.max_tracks);
+  for (std::size_t k = 0; k < n; ++k)
+    picked.push_back(seeds[k * seeds.size() / n]);
   std::vector<cv::Point2f> from;
-  from.reserve(seeds.size() + extra_px.size());
-  for (const FlowSeed& seed : seeds)
+  from.reserve(picked.size() + extra_px.size());
+  for (const FlowSeed& seed : picked)
     from.push_back(seed.px);
   from.insert(from.end(), extra_px.begin(), extra_px.end());
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
   flow_.track(previous, current, from, &to, &ok);
-  extra_tracked->assign(to.begin() + seeds.size(), to.end());
-  extra_ok->assign(ok.begin() + seeds.size(), ok.end());
+  extra_tracked->assign(to.begin() + picked.size(), to.end());
+  extra_ok->assign(ok.begin() + picked.size(), ok.end());
 
   mapping::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
   input.focal_length_px = 0.5 * (camera.calibration().fx + camera.calibration().fy);
-  for (std::size_t i = 0; i < seeds.size(); ++i) {
+  for (std::size_t i = 0; i < picked.size(); ++i) {
     if (!ok[i]) continue;
     input.observations.push_back(
-        {seeds[i].p_world, camera.undistortToNormalized(Eigen::Vector2d(to[i].x, to[i].y))});
+        {picked[i].p_world, camera.undistortToNormalized(Eigen::Vector2d(to[i].x, to[i].y))});
   }
   if (static_cast<int>(input.observations.size()) < params_.min_tracks) {
     return fallback(T_guess, scene_depth);

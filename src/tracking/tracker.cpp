@@ -70,7 +70,7 @@ Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const Trac
     : camera_(std::move(camera)),
       params_(params),
       focal_(camera_ ? 0.5 * (camera_->calibration().fx + camera_->calibration().fy) : 0.0),
-      initializer_(camera_, params.initializer, params.features),
+      initializer_(camera_, params.initializer, params.features, params.motion_prior.flow),
       motion_prior_(params.motion_prior, params.motion_ba),
       candidates_(params.candidates, params.features, focal_) {
   params_.validate();
@@ -100,10 +100,18 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   const ImagePyramid pyramid =
       buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
   result.times.prepare = stage.lapMs();
-  if (state_ == TrackingState::kInitializing) {
-    initialise(timestamp, pyramid, &result);
-  } else {
-    track(timestamp, pyramid, &result);
+  try {
+    if (state_ == TrackingState::kInitializing) {
+      initialise(timestamp, pyramid, &result);
+    } else {
+      track(timestamp, pyramid, &result);
+    }
+  } catch (const cv::Exception& e) {
+    // An image OpenCV cannot process must not end the run: report it, keep the state.
+    result = FrameResult{};
+    result.timestamp = timestamp;
+    result.rejected = true;
+    result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
   }
   result.state = state_;
   result.times.total = total.lapMs();

@@ -49,8 +49,11 @@ struct InitialMap {
 
 class MapInitializer {
  public:
+  /// `flow` gives the Lucas-Kanade window and levels (the pyramids are padded for that window);
+  /// the initializer always uses Lucas-Kanade with a forward-backward check.
   MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
-                 const InitializerParams& params, const FeatureDetectionParams& features);
+                 const InitializerParams& params, const FeatureDetectionParams& features,
+                 const OpticalFlowParams& flow = {});
 
   /// Feeds the next frame; returns the initial map once two views reconstruct.
   std::optional<InitialMap> addFrame(double timestamp, const ImagePyramid& image);

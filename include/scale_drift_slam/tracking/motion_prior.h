@@ -23,6 +23,7 @@ struct MotionPriorParams {
   OpticalFlowParams flow;
   double flow_sigma_px = 0.5;               ///< Noise of a flow track (pixels).
   int min_tracks = 12;                      ///< Fewer flow tracks: constant-velocity fallback.
+  int max_tracks = 150;                     ///< At most this many map points are flowed (evenly).
   double min_rotation_sigma = 0.002;        ///< Floor of Sigma_Delta (radians).
   double min_translation_sigma = 0.005;     ///< Floor of Sigma_Delta (fraction of the scene depth).
   double fallback_rotation_sigma = 0.05;    ///< Sigma_Delta of the fallback (radians).

@@ -23,7 +23,7 @@ std::string flowMethodName(FlowMethod method);
 
 struct OpticalFlowParams {
   FlowMethod method = FlowMethod::kLucasKanade;
-  int window = 21;          ///< Lucas-Kanade window (pixels, odd).
+  int window = 15;          ///< Lucas-Kanade window (pixels, odd).
   int pyramid_levels = 4;   ///< Levels used by Lucas-Kanade (1 = no pyramid).
   int max_iterations = 20;  ///< Lucas-Kanade iterations per level.
   double max_error = 30.0;  ///< Lucas-Kanade: drop points whose mean patch error is larger.
