@@ -50,11 +50,14 @@ class BagImageSequence : public io::ImageSequence {
 
   std::optional<io::SequenceFrame> next() override {
     while (it_ != view_->end()) {
+      // Read the message before advancing: the iterator owns the instance it points to.
       const rosbag::MessageInstance& m = *it_;
-      ++it_;
+      const auto image = m.instantiate<sensor_msgs::Image>();
+      const auto compressed = image ? nullptr : m.instantiate<sensor_msgs::CompressedImage>();
       io::SequenceFrame frame;
       frame.source = path_ + ":" + m.getTopic();
-      if (const auto image = m.instantiate<sensor_msgs::Image>()) {
+      ++it_;
+      if (image) {
         frame.timestamp = image->header.stamp.toSec();
         frame.encoding = image->encoding;
         try {
@@ -64,7 +67,7 @@ class BagImageSequence : public io::ImageSequence {
         }
         return frame;
       }
-      if (const auto compressed = m.instantiate<sensor_msgs::CompressedImage>()) {
+      if (compressed) {
         frame.timestamp = compressed->header.stamp.toSec();
         frame.image = cv::imdecode(compressed->data, cv::IMREAD_UNCHANGED);
         return frame;
