@@ -91,12 +91,13 @@ void addTimes(const tracking::FrameResult& r, io::StageTimings* timings) {
   timings->add("filters", r.times.filters);
   timings->add("keyframe", r.times.keyframe);
   timings->add("tracking_total", r.times.total);
+  timings->add("tracking_cpu", r.times.cpu);
 }
 
 int run(const io::CommandLine& args) {
   const auto start = std::chrono::steady_clock::now();
-  args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic",
-                           "max-frames", "quiet"});
+  args.rejectUnknownFlags(
+      {"out", "calib", "config", "topic", "camera-info-topic", "max-frames", "quiet"});
   const std::string dataset = args.positional(0, "DATASET");
   const fs::path out = args.required("out");
   const long max_frames = args.integer("max-frames", -1);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <stdexcept>
 
 namespace scale_drift_slam::tracking {
@@ -19,6 +20,13 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
+
+/// CPU time of the calling thread in milliseconds.
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
 
 double median(std::vector<double> values) {
   if (values.empty()) return 0.0;
@@ -78,6 +86,7 @@ Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const Trac
 
 FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding) {
   Stopwatch total, stage;
+  const double cpu_start = threadCpuMs();
   FrameResult result;
   result.timestamp = timestamp;
   result.state = state_;
@@ -115,6 +124,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   }
   result.state = state_;
   result.times.total = total.lapMs();
+  result.times.cpu = threadCpuMs() - cpu_start;
   return result;
 }
 
