@@ -21,6 +21,7 @@ void ActiveSearchParams::validate() const {
   }
   if (fast_threshold < 1) throw std::invalid_argument("search.fast_threshold must be >= 1");
   if (!(max_scale_change > 1.0)) throw std::invalid_argument("search.max_scale_change must be > 1");
+  if (max_points < 1) throw std::invalid_argument("search.max_points must be >= 1");
   if (!(max_view_angle_deg > 0.0 && max_view_angle_deg <= 90.0)) {
     throw std::invalid_argument("search.max_view_angle_deg must be in (0, 90]");
   }
@@ -98,18 +99,42 @@ bool warpTemplate(const PointAppearance& appearance, const Eigen::Matrix2d& A_re
   return true;
 }
 
-/// NCC of the template with the image patch centred at integer pixel (x, y); -2 off the image.
-double scoreAt(const cv::Mat& image, int x, int y, int r, const std::vector<float>& templ,
-               std::vector<float>* buffer) {
+/// Makes the template zero-mean with unit norm; false when it has no texture.
+bool normalizeTemplate(std::vector<float>* templ) {
+  double sum = 0.0;
+  for (const float v : *templ)
+    sum += v;
+  const float mean = static_cast<float>(sum / templ->size());
+  double norm_sq = 0.0;
+  for (float& v : *templ) {
+    v -= mean;
+    norm_sq += v * v;
+  }
+  if (norm_sq < 1e-6 * templ->size()) return false;
+  const float scale = static_cast<float>(1.0 / std::sqrt(norm_sq));
+  for (float& v : *templ)
+    v *= scale;
+  return true;
+}
+
+/// NCC of a normalised template (zero mean, unit norm) with the image patch centred at integer
+/// pixel (x, y), in one pass: sum t b / sqrt(sum b^2 - (sum b)^2 / n). -2 off the image.
+double scoreAt(const cv::Mat& image, int x, int y, int r, const std::vector<float>& templ) {
   if (x < r || y < r || x + r >= image.cols || y + r >= image.rows) return -2.0;
-  buffer->resize(templ.size());
-  int k = 0;
+  float sb = 0.f, sbb = 0.f, stb = 0.f;
+  const float* t = templ.data();
   for (int dy = -r; dy <= r; ++dy) {
     const unsigned char* row = image.ptr<unsigned char>(y + dy) + x - r;
-    for (int dx = 0; dx <= 2 * r; ++dx)
-      (*buffer)[k++] = row[dx];
+    for (int dx = 0; dx <= 2 * r; ++dx, ++t) {
+      const float b = row[dx];
+      sb += b;
+      sbb += b * b;
+      stb += *t * b;
+    }
   }
-  return normalizedCrossCorrelation(templ.data(), buffer->data(), static_cast<int>(templ.size()));
+  const float variance = sbb - sb * sb / static_cast<float>(templ.size());
+  if (variance < 1e-3f * templ.size()) return -1.0;
+  return stb / std::sqrt(variance);
 }
 
 /// The vertex of the parabola through (-1, a), (0, b), (1, c), within [-0.5, 0.5].
@@ -126,6 +151,121 @@ CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& pa
                     grey.rows);
 }
 
+namespace {
+
+struct Prediction {
+  std::size_t index;
+  Eigen::Vector3d p_cur, p_ref;
+};
+
+/// Projects a point and checks that it is in the image and in its viewable range (view angle
+/// and scale change against its reference keyframe).
+bool predict(const SearchPoint& point, const geometry::SE3& T_cur_world,
+             const geometry::CameraModel& camera, const ActiveSearchParams& params,
+             Prediction* prediction, SearchMatch* match) {
+  if (point.appearance == nullptr || point.appearance->empty()) return false;
+  prediction->p_cur = T_cur_world * point.p_world;
+  prediction->p_ref = point.T_ref_world * point.p_world;
+  if (prediction->p_cur.z() <= 0.0 || prediction->p_ref.z() <= 0.0) return false;
+  const auto predicted = camera.project(prediction->p_cur);
+  if (!predicted || !camera.isInImage(*predicted, params.template_radius + 1)) return false;
+  const Eigen::Vector3d ray_cur = point.p_world - T_cur_world.inverseTranslation();
+  const Eigen::Vector3d ray_ref = point.p_world - point.T_ref_world.inverseTranslation();
+  const double scale = ray_cur.norm() / ray_ref.norm();
+  if (ray_cur.normalized().dot(ray_ref.normalized()) <
+      std::cos(params.max_view_angle_deg * M_PI / 180.0)) {
+    return false;
+  }
+  if (scale > params.max_scale_change || scale * params.max_scale_change < 1.0) return false;
+  match->visible = true;
+  match->predicted_px = *predicted;
+  return true;
+}
+
+/// At most `max_points` of the predictions, spread over the image: a round robin over the cells
+/// of an 8 x 6 grid.
+std::vector<Prediction> spread(std::vector<Prediction> predictions,
+                               const std::vector<SearchMatch>& matches, int width, int height,
+                               int max_points) {
+  if (static_cast<int>(predictions.size()) <= max_points) return predictions;
+  constexpr int kCols = 8, kRows = 6;
+  std::vector<std::vector<Prediction>> cells(kCols * kRows);
+  for (const Prediction& p : predictions) {
+    const Eigen::Vector2d& px = matches[p.index].predicted_px;
+    const int cx = std::clamp(static_cast<int>(px.x() * kCols / width), 0, kCols - 1);
+    const int cy = std::clamp(static_cast<int>(px.y() * kRows / height), 0, kRows - 1);
+    cells[cy * kCols + cx].push_back(p);
+  }
+  std::vector<Prediction> chosen;
+  for (std::size_t round = 0; static_cast<int>(chosen.size()) < max_points; ++round) {
+    bool any = false;
+    for (auto& cell : cells) {
+      if (round >= cell.size() || static_cast<int>(chosen.size()) >= max_points) continue;
+      chosen.push_back(cell[round]);
+      any = true;
+    }
+    if (!any) break;
+  }
+  return chosen;
+}
+
+/// NCC matching of one predicted point: the best of the prediction itself and the FAST corners
+/// inside its gated region, then the sub-pixel parabola.
+void matchPoint(const SearchPoint& point, const Prediction& prediction,
+                const geometry::SE3& T_cur_world, const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
+                const geometry::CameraModel& camera, const cv::Mat& image,
+                const CornerGrid& corners, const ActiveSearchParams& params,
+                std::vector<float>* templ, std::vector<int>* candidates, SearchMatch* match) {
+  const int r = params.template_radius;
+  const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
+  if (!warpTemplate(*point.appearance,
+                    referenceWarp(camera, prediction.p_ref, prediction.p_cur, T_cur_ref), r,
+                    templ) ||
+      !normalizeTemplate(templ)) {
+    return;
+  }
+  // Innovation covariance of the prediction: J Sigma_Delta J^T + sigma^2 I (+ the floor that
+  // keeps the region at least min_radius_px).
+  Eigen::Matrix<double, 2, 6> J;
+  J << camera.projectionJacobian(prediction.p_cur) *
+           geometry::SE3::actionJacobian(prediction.p_cur);
+  const double floor = params.pixel_sigma_px * params.pixel_sigma_px +
+                       params.min_radius_px * params.min_radius_px / params.gate_chi2;
+  const Eigen::Matrix2d Sigma_z =
+      J * Sigma_Delta * J.transpose() + Eigen::Matrix2d::Identity() * floor;
+  const Eigen::Matrix2d information = Sigma_z.inverse();
+  const double rx = std::min(std::sqrt(params.gate_chi2 * Sigma_z(0, 0)), params.max_radius_px);
+  const double ry = std::min(std::sqrt(params.gate_chi2 * Sigma_z(1, 1)), params.max_radius_px);
+  const Eigen::Vector2d& predicted = match->predicted_px;
+  corners.query(predicted, rx, ry, candidates);
+  int best_x = static_cast<int>(std::lround(predicted.x()));
+  int best_y = static_cast<int>(std::lround(predicted.y()));
+  double best = scoreAt(image, best_x, best_y, r, *templ);
+  for (int c : *candidates) {
+    const cv::Point2f& pt = corners.corners()[c].pt;
+    const Eigen::Vector2d d = Eigen::Vector2d(pt.x, pt.y) - predicted;
+    if (d.dot(information * d) > params.gate_chi2) continue;
+    const int x = static_cast<int>(pt.x), y = static_cast<int>(pt.y);
+    const double score = scoreAt(image, x, y, r, *templ);
+    if (score > best) {
+      best = score;
+      best_x = x;
+      best_y = y;
+    }
+  }
+  match->ncc = best;
+  if (best < params.min_ncc) return;
+  const double dx = parabolaPeak(scoreAt(image, best_x - 1, best_y, r, *templ), best,
+                                 scoreAt(image, best_x + 1, best_y, r, *templ));
+  const double dy = parabolaPeak(scoreAt(image, best_x, best_y - 1, r, *templ), best,
+                                 scoreAt(image, best_x, best_y + 1, r, *templ));
+  match->found = true;
+  match->px = Eigen::Vector2d(best_x + dx, best_y + dy);
+  match->xy = camera.undistortToNormalized(match->px);
+}
+
+}  // namespace
+
 std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const geometry::SE3& T_cur_world,
                                       const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
@@ -133,69 +273,19 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const ImagePyramid& image, const CornerGrid& corners,
                                       const ActiveSearchParams& params) {
   std::vector<SearchMatch> matches(points.size());
-  const int r = params.template_radius;
-  const double cos_max_angle = std::cos(params.max_view_angle_deg * M_PI / 180.0);
-  const Eigen::Vector3d center_cur = T_cur_world.inverseTranslation();
-  const Eigen::Matrix2d floor = Eigen::Matrix2d::Identity() *
-                                (params.pixel_sigma_px * params.pixel_sigma_px +
-                                 params.min_radius_px * params.min_radius_px / params.gate_chi2);
-  std::vector<float> templ, buffer;
-  std::vector<int> candidates;
+  std::vector<Prediction> predictions;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const SearchPoint& point = points[i];
-    SearchMatch& match = matches[i];
-    if (point.appearance == nullptr || point.appearance->empty()) continue;
-    const Eigen::Vector3d p_cur = T_cur_world * point.p_world;
-    const Eigen::Vector3d p_ref = point.T_ref_world * point.p_world;
-    if (p_cur.z() <= 0.0 || p_ref.z() <= 0.0) continue;
-    const auto predicted = camera.project(p_cur);
-    if (!predicted || !camera.isInImage(*predicted, r + 1)) continue;
-    // Viewable range: not too far off the reference viewing direction, nor scale.
-    const Eigen::Vector3d ray_cur = point.p_world - center_cur;
-    const Eigen::Vector3d ray_ref = point.p_world - point.T_ref_world.inverseTranslation();
-    const double scale = ray_cur.norm() / ray_ref.norm();
-    if (ray_cur.normalized().dot(ray_ref.normalized()) < cos_max_angle) continue;
-    if (scale > params.max_scale_change || scale * params.max_scale_change < 1.0) continue;
-    match.visible = true;
-    match.predicted_px = *predicted;
-    const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
-    if (!warpTemplate(*point.appearance, referenceWarp(camera, p_ref, p_cur, T_cur_ref), r,
-                      &templ)) {
-      continue;
+    Prediction prediction{i, {}, {}};
+    if (predict(points[i], T_cur_world, camera, params, &prediction, &matches[i])) {
+      predictions.push_back(prediction);
     }
-    // Innovation covariance of the prediction: J Sigma_Delta J^T + sigma^2 I (+ the floor).
-    Eigen::Matrix<double, 2, 6> J;
-    J << camera.projectionJacobian(p_cur) * geometry::SE3::actionJacobian(p_cur);
-    const Eigen::Matrix2d Sigma_z = J * Sigma_Delta * J.transpose() + floor;
-    const Eigen::Matrix2d information = Sigma_z.inverse();
-    const double rx = std::min(std::sqrt(params.gate_chi2 * Sigma_z(0, 0)), params.max_radius_px);
-    const double ry = std::min(std::sqrt(params.gate_chi2 * Sigma_z(1, 1)), params.max_radius_px);
-    corners.query(*predicted, rx, ry, &candidates);
-    int best_x = static_cast<int>(std::lround(predicted->x()));
-    int best_y = static_cast<int>(std::lround(predicted->y()));
-    double best = scoreAt(image.base(), best_x, best_y, r, templ, &buffer);
-    for (int c : candidates) {
-      const cv::Point2f& pt = corners.corners()[c].pt;
-      const Eigen::Vector2d d = Eigen::Vector2d(pt.x, pt.y) - *predicted;
-      if (d.dot(information * d) > params.gate_chi2) continue;
-      const int x = static_cast<int>(pt.x), y = static_cast<int>(pt.y);
-      const double score = scoreAt(image.base(), x, y, r, templ, &buffer);
-      if (score > best) {
-        best = score;
-        best_x = x;
-        best_y = y;
-      }
-    }
-    match.ncc = best;
-    if (best < params.min_ncc) continue;
-    const cv::Mat& base = image.base();
-    const double dx = parabolaPeak(scoreAt(base, best_x - 1, best_y, r, templ, &buffer), best,
-                                   scoreAt(base, best_x + 1, best_y, r, templ, &buffer));
-    const double dy = parabolaPeak(scoreAt(base, best_x, best_y - 1, r, templ, &buffer), best,
-                                   scoreAt(base, best_x, best_y + 1, r, templ, &buffer));
-    match.found = true;
-    match.px = Eigen::Vector2d(best_x + dx, best_y + dy);
-    match.xy = camera.undistortToNormalized(match.px);
+  }
+  std::vector<float> templ;
+  std::vector<int> candidates;
+  for (const Prediction& prediction : spread(std::move(predictions), matches, camera.width(),
+                                             camera.height(), params.max_points)) {
+    matchPoint(points[prediction.index], prediction, T_cur_world, Sigma_Delta, camera, image.base(),
+               corners, params, &templ, &candidates, &matches[prediction.index]);
   }
   return matches;
 }

@@ -112,5 +112,37 @@ TEST(SlamSystem, MappingThreadGivesTheSameQuality) {
   EXPECT_LT(o.ate, 0.01 * o.path) << "ATE " << o.ate << " over a path of " << o.path;
 }
 
+TEST(SlamSystem, SaysWhenLostAndAddsNoKeyframesThen) {
+  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto cam = camera();
+  SlamParams params;
+  params.mapping_thread = false;
+  SlamSystem slam(cam, params);
+  auto render = [&](int k) {
+    return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
+  };
+  for (int k = 0; k < 40; ++k)
+    slam.processFrame(0.1 * k, render(k), tracking::PixelEncoding::kMono8);
+  ASSERT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
+  const std::size_t keyframes = slam.tracker().trackingMap().numKeyframes();
+  // A different, textured view (the camera covered, or a cut in the video): nothing matches.
+  for (int k = 0; k < 5; ++k) {
+    const tracking::FrameResult r =
+        slam.processFrame(4.0 + 0.1 * k, tracking::test::texturedImage(kWidth, kHeight, 99 + k),
+                          tracking::PixelEncoding::kMono8);
+    EXPECT_EQ(r.state, tracking::TrackingState::kLost);
+    EXPECT_FALSE(r.has_pose);
+    EXPECT_TRUE(r.keyframes.empty());
+    EXPECT_NE(r.message.find("lost"), std::string::npos) << r.message;
+  }
+  EXPECT_EQ(slam.tracker().trackingMap().numKeyframes(), keyframes);
+  // Back to the room where it was lost: the wide prior around the last pose finds it again.
+  bool recovered = false;
+  for (int k = 40; k < 50 && !recovered; ++k) {
+    recovered = slam.processFrame(0.1 * k, render(k), tracking::PixelEncoding::kMono8).has_pose;
+  }
+  EXPECT_TRUE(recovered);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::mapping

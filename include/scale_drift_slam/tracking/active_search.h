@@ -29,6 +29,7 @@ struct ActiveSearchParams {
   int fast_threshold = 8;            ///< FAST threshold of the candidate corners in a frame.
   double max_scale_change = 3.0;     ///< Skip points seen this much larger/smaller than in the ref.
   double max_view_angle_deg = 60.0;  ///< Skip points seen this far off their reference direction.
+  int max_points = 300;  ///< Match at most this many visible points, spread over the image.
   void validate() const;
 };
 
@@ -57,6 +58,7 @@ struct SearchMatch {
   Eigen::Vector2d predicted_px = Eigen::Vector2d::Zero();
   double ncc = -1.0;
   bool visible = false;  ///< Predicted inside the image and in a viewable range.
+  // A visible point may be left unsearched when more than max_points are visible.
 };
 
 /// The affine map taking pixel offsets around the point's projection in the current camera to
