@@ -43,10 +43,12 @@ Polygon clip(const Polygon& polygon, const Eigen::Vector3d& a) {
 
 }  // namespace
 
-/// A surface in the camera frame. Per pixel with unit ray r: range t = dn / (n.r), barycentric
-/// b_i = t (g_i.r) - g_i.o, texel = texel_origin + texel_axes b, and the level of detail
-/// lod = lod_constant + log2(pixel size) - 2 log2|n.r| (the footprint's long axis, t alpha / |n.r|,
-/// in texels: rho |dn| alpha / (n.r)^2 with rho the surface's texel density).
+/// A surface in the camera frame. Per pixel with ray r (unit, or with r.z = 1 for linear cameras):
+/// t = dn / (n.r) (range, or depth z), barycentric b_i = t (g_i.r) - g_i.o, texel = texel_origin
+/// + texel_axes b, and the level of detail from the footprint's long axis in texels,
+/// rho * range * alpha / |n.r_unit| = rho |dn| alpha |r|^2 / (n.r)^2 (rho: the surface's texel
+/// density, alpha: the pixel's angular size), i.e. lod = lod_constant + lod_offset - 2 log2|n.r|
+/// with lod_constant = log2(rho |dn|) and lod_offset = log2(alpha) + 2 log2|r| per pixel.
 struct Renderer::Prepared {
   const Surface* surface = nullptr;
   int index = 0;
@@ -67,7 +69,7 @@ Renderer::Renderer(const geometry::CameraModel& camera)
             std::all_of(c.distortion.begin(), c.distortion.end(), [](double d) { return d == 0; });
   const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
   rays_.resize(3 * n);
-  log2_pixel_.resize(n);
+  lod_offset_.resize(n);
   x_min_ = y_min_ = std::numeric_limits<double>::infinity();
   x_max_ = y_max_ = -x_min_;
   std::vector<Eigen::Vector3d> row_rays(static_cast<size_t>(width_ + 1));
@@ -90,7 +92,9 @@ Renderer::Renderer(const geometry::CameraModel& camera)
       for (int k = 0; k < 3; ++k) rays_[3 * i + static_cast<size_t>(k)] = static_cast<float>(r[k]);
       const double alpha = std::max((row_rays[static_cast<size_t>(x) + 1] - r).norm(),
                                     (next_rays[static_cast<size_t>(x)] - r).norm());
-      log2_pixel_[i] = static_cast<float>(std::log2(std::max(alpha, 1e-9)));
+      // The linear path uses r / r.z, whose length is 1 / r.z.
+      lod_offset_[i] = static_cast<float>(std::log2(std::max(alpha, 1e-9)) -
+                                          (linear_ ? 2.0 * std::log2(r.z()) : 0.0));
       x_min_ = std::min(x_min_, r.x() / r.z());
       x_max_ = std::max(x_max_, r.x() / r.z());
       y_min_ = std::min(y_min_, r.y() / r.z());
@@ -103,10 +107,25 @@ Renderer::Renderer(const geometry::CameraModel& camera)
   x_max_ += margin_x;
   y_min_ -= margin_y;
   y_max_ += margin_y;
-  range_.create(height_, width_, CV_32F);
+  depth_.create(height_, width_, CV_32F);
+  const geometry::CameraCalibration& k = camera.calibration();
+  for (int x = 0; x < width_; ++x) column_x_.push_back(static_cast<float>((x - k.cx) / k.fx));
+  for (int y = 0; y < height_; ++y) row_y_.push_back(static_cast<float>((y - k.cy) / k.fy));
   index_.create(height_, width_, CV_32S);
   span_lo_.resize(static_cast<size_t>(height_));
   span_hi_.resize(static_cast<size_t>(height_));
+}
+
+cv::Mat Renderer::range() const {
+  if (!linear_) return depth_.clone();
+  cv::Mat range(height_, width_, CV_32F);
+  for (int y = 0; y < height_; ++y) {
+    for (int x = 0; x < width_; ++x) {
+      const float xn = column_x_[static_cast<size_t>(x)], yn = row_y_[static_cast<size_t>(y)];
+      range.at<float>(y, x) = depth_.at<float>(y, x) * std::sqrt(1.0f + xn * xn + yn * yn);
+    }
+  }
+  return range;
 }
 
 Eigen::Vector3f Renderer::ray(int x, int y) const {
@@ -117,16 +136,23 @@ Eigen::Vector3f Renderer::ray(int x, int y) const {
 bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix3d& R,
                        const Eigen::Vector3d& t, Prepared& out) const {
   const Eigen::Vector3d o = R * s.origin + t, e1 = R * s.edge1, e2 = R * s.edge2;
+  Polygon polygon = {o, o + e1};
+  if (s.shape == Surface::Shape::kParallelogram) polygon.push_back(o + e1 + e2);
+  polygon.push_back(o + e2);
+  // Quick rejection: every corner outside the same side of the viewing frustum.
+  const Eigen::Vector3d planes[5] = {{0, 0, 1}, {-1, 0, x_max_}, {1, 0, -x_min_}, {0, -1, y_max_},
+                                     {0, 1, -y_min_}};
+  for (const Eigen::Vector3d& plane : planes) {
+    if (std::all_of(polygon.begin(), polygon.end(),
+                    [&](const Eigen::Vector3d& p) { return plane.dot(p) < 0; })) {
+      return false;
+    }
+  }
   const Eigen::Vector3d normal = e1.cross(e2).normalized();
   const double dn = normal.dot(o);
   if (std::abs(dn) < 1e-9) return false;              // the camera lies in the plane
   if (!s.double_sided && dn < 0) return false;  // seen from the back (see Surface)
-  Polygon polygon = {o, o + e1};
-  if (s.shape == Surface::Shape::kParallelogram) polygon.push_back(o + e1 + e2);
-  polygon.push_back(o + e2);
-  for (const Eigen::Vector3d& plane :
-       {Eigen::Vector3d(-1, 0, x_max_), Eigen::Vector3d(1, 0, -x_min_),
-        Eigen::Vector3d(0, -1, y_max_), Eigen::Vector3d(0, 1, -y_min_)}) {
+  for (const Eigen::Vector3d& plane : {planes[1], planes[2], planes[3], planes[4]}) {
     if (polygon.size() < 3) return false;
     polygon = clip(polygon, plane);
   }
@@ -266,34 +292,50 @@ void Renderer::rasterise(const Prepared& ps, const Scene& scene, cv::Mat& image)
       x_begin = std::max(0, static_cast<int>(std::floor(lo)));
       x_end = std::min(width_, static_cast<int>(std::ceil(hi)) + 1);
     }
-    float* range = range_.ptr<float>(y);
+    float* depth = depth_.ptr<float>(y);
     int* index = index_.ptr<int>(y);
     std::uint8_t* out = image.ptr<std::uint8_t>(y);
     const size_t row_offset = static_cast<size_t>(y) * static_cast<size_t>(width_);
-    for (int x = x_begin; x < x_end; ++x) {
-      const size_t i = row_offset + static_cast<size_t>(x);
-      const float* r = &rays_[3 * i];
-      const float nr = ps.n.x() * r[0] + ps.n.y() * r[1] + ps.n.z() * r[2];
+    // Everything per pixel is a function of the ray r: t = dn / (n.r), b_i = t (g_i.r) - g_i.o.
+    auto shade = [&](int x, float nr, float g1r, float g2r) {
       const float t = ps.dn / nr;
-      if (!(t > 0.0f) || !(t < range[x])) continue;
-      const float b1 = t * (ps.g1.x() * r[0] + ps.g1.y() * r[1] + ps.g1.z() * r[2]) - ps.g1o;
-      const float b2 = t * (ps.g2.x() * r[0] + ps.g2.y() * r[1] + ps.g2.z() * r[2]) - ps.g2o;
-      if (b1 < -kInsideTolerance || b2 < -kInsideTolerance) continue;
-      if (ps.triangle ? (b1 + b2 > limit) : (b1 > limit || b2 > limit)) continue;
-      range[x] = t;
+      if (!(t > 0.0f) || !(t < depth[x])) return;
+      const float b1 = t * g1r - ps.g1o;
+      const float b2 = t * g2r - ps.g2o;
+      if (b1 < -kInsideTolerance || b2 < -kInsideTolerance) return;
+      if (ps.triangle ? (b1 + b2 > limit) : (b1 > limit || b2 > limit)) return;
+      depth[x] = t;
       index[x] = ps.index;
       const float u = t0.x() + A(0, 0) * b1 + A(0, 1) * b2;
       const float v = t0.y() + A(1, 0) * b1 + A(1, 1) * b2;
-      const float lod = ps.lod_constant + log2_pixel_[i] - 2.0f * fastLog2(std::abs(nr));
+      const size_t i = row_offset + static_cast<size_t>(x);
+      const float lod = ps.lod_constant + lod_offset_[i] - 2.0f * fastLog2(std::abs(nr));
       const float value = texture.sample(u, v, lod) * gain + 0.5f;
       out[x] = static_cast<std::uint8_t>(value >= 255.0f ? 255.0f : value);
+    };
+    if (linear_) {
+      // r = (x/z, y/z, 1): the dot products are affine along the row.
+      const float yn = row_y_[static_cast<size_t>(y)];
+      const float n_row = ps.n.y() * yn + ps.n.z(), g1_row = ps.g1.y() * yn + ps.g1.z();
+      const float g2_row = ps.g2.y() * yn + ps.g2.z();
+      for (int x = x_begin; x < x_end; ++x) {
+        const float xn = column_x_[static_cast<size_t>(x)];
+        shade(x, n_row + ps.n.x() * xn, g1_row + ps.g1.x() * xn, g2_row + ps.g2.x() * xn);
+      }
+    } else {
+      for (int x = x_begin; x < x_end; ++x) {
+        const float* r = &rays_[3 * (row_offset + static_cast<size_t>(x))];
+        shade(x, ps.n.x() * r[0] + ps.n.y() * r[1] + ps.n.z() * r[2],
+              ps.g1.x() * r[0] + ps.g1.y() * r[1] + ps.g1.z() * r[2],
+              ps.g2.x() * r[0] + ps.g2.y() * r[1] + ps.g2.z() * r[2]);
+      }
     }
   }
 }
 
 void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image) {
   image.create(height_, width_, CV_8UC1);
-  range_.setTo(cv::Scalar(std::numeric_limits<float>::infinity()));
+  depth_.setTo(cv::Scalar(std::numeric_limits<float>::infinity()));
   index_.setTo(cv::Scalar(-1));
   const Eigen::Matrix3d R = T_cam_world.rotationMatrix();
   const Eigen::Vector3d& t = T_cam_world.translation();

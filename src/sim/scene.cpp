@@ -54,6 +54,17 @@ int Scene::addSurface(const Surface& surface) {
   if (surface.edge1.cross(surface.edge2).norm() < 1e-12) {
     throw std::invalid_argument("degenerate surface (parallel or zero edges)");
   }
+  // The renderer reads at most half a texel outside the texture: every corner's texel must lie
+  // inside it.
+  const Texture& t = texture(surface.texture);
+  const Eigen::Vector2d corners[4] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  for (int k = 0; k < (surface.shape == Surface::Shape::kTriangle ? 3 : 4); ++k) {
+    const Eigen::Vector2d texel = surface.texel_origin + surface.texel_axes * corners[k];
+    if (texel.x() < -1e-6 || texel.y() < -1e-6 || texel.x() > t.width() + 1e-6 ||
+        texel.y() > t.height() + 1e-6) {
+      throw std::invalid_argument("surface maps outside its texture");
+    }
+  }
   surfaces_.push_back(surface);
   return static_cast<int>(surfaces_.size()) - 1;
 }

@@ -18,17 +18,17 @@ Texture::Texture(const cv::Mat& image) {
     images_.push_back(next);
   }
   for (const cv::Mat& m : images_) {
+    cv::Mat padded;
+    cv::copyMakeBorder(m, padded, 1, 1, 1, 1, cv::BORDER_REPLICATE);
+    padded_.push_back(padded);
     Level level;
-    level.data = m.ptr<std::uint8_t>(0);
-    level.width = m.cols;
-    level.height = m.rows;
-    level.stride = m.step[0];
+    level.data = padded.ptr<std::uint8_t>(1) + 1;
+    level.stride = padded.step[0];
     level.scale_x = static_cast<float>(m.cols) / static_cast<float>(images_[0].cols);
     level.scale_y = static_cast<float>(m.rows) / static_cast<float>(images_[0].rows);
-    level.max_x = static_cast<float>(m.cols) - 1.001f;
-    level.max_y = static_cast<float>(m.rows) - 1.001f;
     levels_.push_back(level);
   }
+  max_lod_ = static_cast<float>(levels_.size() - 1);
 }
 
 }  // namespace scale_drift_slam::sim

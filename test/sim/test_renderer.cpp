@@ -150,7 +150,7 @@ TEST(Renderer, TrackedFeaturesMoveAsTheGroundTruthPredicts) {
                                                         {"office_orbit", "none"},
                                                         {"corridor_straight", "fisheye"}}) {
     int tracked = 0;
-    const double median = medianFlowError(scene, distortion, 0.1, &tracked);
+    const double median = medianFlowError(scene, distortion, 1.0 / 30.0, &tracked);
     SCOPED_TRACE(scene + " " + distortion);
     std::printf("KLT %-18s %-8s: %d corners, median error %.3f px\n", scene.c_str(),
                 distortion.c_str(), tracked, median);

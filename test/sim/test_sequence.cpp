@@ -34,12 +34,13 @@ TEST(Sequence, SameSeedSameImagesOtherSeedOtherImages) {
     SequenceParams params = smallParams(scene);
     params.realism.noise_sigma = 2.0;
     SequenceRenderer a(params), b(params);
-    params.seed = 2;
-    SequenceRenderer c(params);
-    const RenderedFrame fa = a.render(2), fb = b.render(2), fc = c.render(2);
+    const RenderedFrame fa = a.render(2), fb = b.render(2);
     SCOPED_TRACE(scene);
     EXPECT_TRUE(identical(fa.image, fb.image));
-    EXPECT_FALSE(identical(fa.image, fc.image));
+    if (scene == "office_orbit") {  // another seed: other textures (one scene suffices)
+      params.seed = 2;
+      EXPECT_FALSE(identical(fa.image, SequenceRenderer(params).render(2).image));
+    }
     EXPECT_EQ(fa.stamp_ns, fb.stamp_ns);
     EXPECT_LT((fa.T_world_cam.matrix() - fb.T_world_cam.matrix()).norm(), 1e-15);
   }

@@ -32,7 +32,7 @@ class Renderer {
 
   /// Of the last render: the range (metres along the ray) per pixel, +inf where no surface was
   /// hit (CV_32F), and the index of the surface seen per pixel, -1 for the background (CV_32S).
-  const cv::Mat& range() const { return range_; }
+  cv::Mat range() const;
   const cv::Mat& surfaceIndex() const { return index_; }
   /// The unit ray (camera frame) through the centre of pixel (x, y).
   Eigen::Vector3f ray(int x, int y) const;
@@ -51,10 +51,14 @@ class Renderer {
   std::unique_ptr<geometry::CameraModel> camera_;  ///< Own copy of the model.
   bool linear_;  ///< No distortion: project with K alone.
   int width_, height_;
-  std::vector<float> rays_;        ///< 3 floats per pixel, unit length.
-  std::vector<float> log2_pixel_;  ///< log2 of the pixel's angular size (radians).
+  std::vector<float> rays_;        ///< 3 floats per pixel, unit length (distorted cameras).
+  std::vector<float> column_x_, row_y_;  ///< x/z per column, y/z per row (linear cameras).
+  /// Per pixel log2(alpha) + 2 log2|r| for the ray r the rasteriser uses (unit for distorted
+  /// cameras, z = 1 for linear ones), alpha the pixel's angular size; see Prepared.
+  std::vector<float> lod_offset_;
   double x_min_, x_max_, y_min_, y_max_;  ///< Bounds of x/z and y/z over all rays (with margin).
-  cv::Mat range_, index_;
+  cv::Mat depth_;  ///< z for linear cameras, range along the ray for distorted ones.
+  cv::Mat index_;
   std::vector<float> span_lo_, span_hi_;
   std::vector<Eigen::Vector2d> boundary_;
 };

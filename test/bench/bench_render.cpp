@@ -1,0 +1,58 @@
+// Rendering speed: frames per second of the renderer alone (640x480, one core) per scene and lens
+// model, the scene build time, and a whole 600-frame sequence written as a TUM folder.
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <string>
+
+#include "bench_report.h"
+#include "scale_drift_slam/sim/renderer.h"
+#include "scale_drift_slam/sim/scenario.h"
+#include "scale_drift_slam/sim/sequence.h"
+#include "scale_drift_slam/sim/sequence_writer.h"
+
+namespace sds = scale_drift_slam;
+
+int main(int argc, char** argv) {
+  sds::bench::Report report("render", argc, argv);
+  for (const std::string& name : sds::sim::scenarioNames()) {
+    std::unique_ptr<sds::sim::Scenario> scenario;
+    report.timeMs(name + ": build scene (textures)", 1, [&] {
+      scenario = std::make_unique<sds::sim::Scenario>(sds::sim::makeScenario(name, 1));
+    });
+    for (const std::string distortion : {"none", "radtan", "fisheye"}) {
+      sds::sim::SequenceParams params;
+      params.distortion = distortion;
+      const auto camera = sds::geometry::makeCameraModel(
+          sds::sim::sequenceCalibration(params, scenario->horizontal_fov_deg));
+      sds::sim::Renderer renderer(*camera);
+      cv::Mat image;
+      const int frames = 200;
+      const auto start = std::chrono::steady_clock::now();
+      const std::clock_t cpu_start = std::clock();
+      for (int i = 0; i < frames; ++i) {
+        const double t = scenario->duration * i / frames;
+        renderer.render(scenario->scene, scenario->T_world_cam(t).inverse(), image);
+      }
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+      report.add(name + " 640x480 " + distortion + ": renderer, wall clock", frames / seconds,
+                 "fps", std::to_string(frames) + " frames spread over the trajectory");
+      report.add(name + " 640x480 " + distortion + ": renderer, CPU time", frames / cpu_seconds,
+                 "fps", "one thread; on a shared machine wall-clock fps is lower");
+    }
+  }
+  const std::string out = std::filesystem::temp_directory_path() / "sds_bench_render";
+  std::filesystem::remove_all(out);
+  report.timeMs("office_orbit: 600 frames 640x480 to a TUM folder (PNG)", 1, [&] {
+    sds::sim::SequenceParams params;
+    params.scene = "office_orbit";
+    sds::sim::SequenceRenderer renderer(params);
+    sds::sim::TumSequenceWriter writer(out, renderer.calibration());
+    for (int i = 0; i < renderer.frameCount(); ++i) writer.add(renderer.render(i));
+  }, "scene build, rendering, optics blur, PNG writing");
+  std::filesystem::remove_all(out);
+  return 0;
+}
