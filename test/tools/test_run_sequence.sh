@@ -2,7 +2,8 @@
 # run_sequence end to end through its command line: a short rendered office_orbit clip as a TUM
 # folder and as a rosbag must both be tracked after initialisation and give the outputs DESIGN.md
 # names (trajectory.txt, keyframes.txt, summary.json with counts and per-stage timing); a folder
-# with a corrupt frame still runs; bad input fails with one line and a non-zero exit. ~25 s.
+# with a corrupt frame still runs; bad input fails with one line and a non-zero exit; the
+# trajectory is within 1% of the path (evaluate_trajectory). ~10 s.
 set -euo pipefail
 bin="${SDS_BIN_DIR:?}"
 work="${SDS_TEST_OUTPUT_DIR:?}/run_sequence"
@@ -38,6 +39,16 @@ PY
 
 check_run "$work/office" "$work/out_folder"
 check_run "$work/office.bag" "$work/out_bag"
+# Accuracy through the evaluation tool: ATE after Sim(3) alignment under 1% of the path.
+"$bin/evaluate_trajectory" "$work/office/groundtruth.txt" "$work/out_folder/trajectory.txt" \
+  --json > "$work/evaluation.json"
+/usr/bin/python3 - "$work/evaluation.json" <<'PY'
+import json, sys
+e = json.load(open(sys.argv[1]))
+ratio = e["ate"]["rmse"] / e["ground_truth_path_length"]
+print("office_orbit 90 frames: ATE %.4f m = %.3f%% of the path" % (e["ate"]["rmse"], 100 * ratio))
+assert ratio < 0.01, ratio
+PY
 grep -q "good" "$work/out_folder.log" || fail "no status counts printed"
 grep -q "median ms" "$work/out_folder.log" || fail "no timing table printed"
 
