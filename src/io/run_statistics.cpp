@@ -35,6 +35,7 @@ nlohmann::json StageTimings::toJson() const {
     json[stage] = {{"median_ms", percentile(v, 0.5)},
                    {"p95_ms", percentile(v, 0.95)},
                    {"mean_ms", std::accumulate(v.begin(), v.end(), 0.0) / v.size()},
+                   {"max_ms", *std::max_element(v.begin(), v.end())},
                    {"count", v.size()}};
   }
   return json;

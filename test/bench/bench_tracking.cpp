@@ -92,12 +92,13 @@ void runOne(bench::Report& report, const fs::path& tool, const fs::path& sequenc
   report.add(label + ": keyframes", summary["keyframes"].get<double>(), "");
   report.add(label + ": ATE (Sim(3)-aligned) / path", a.ate_percent, "%");
   report.add(label + ": scale drift first -> last tenth", a.scale_drift, "");
-  for (const std::string stage : {"tracking_total", "tracking_cpu", "flow", "search", "motion_ba",
-                                  "filters", "keyframe", "window_ba"}) {
+  for (const std::string stage : {"frame", "tracking_total", "tracking_cpu", "flow", "search",
+                                  "motion_ba", "filters", "keyframe", "window_ba"}) {
     if (!summary["timing"].contains(stage)) continue;
     const auto& t = summary["timing"][stage];
     report.add(label + ": " + stage + " median", t["median_ms"].get<double>(), "ms");
     report.add(label + ": " + stage + " p95", t["p95_ms"].get<double>(), "ms");
+    if (stage == "frame") report.add(label + ": frame max", t["max_ms"].get<double>(), "ms");
   }
   report.add(label + ": peak memory", summary["peak_memory_mib"].get<double>(), "MiB");
   report.add(label + ": start-up", summary["startup_ms"].get<double>(), "ms");

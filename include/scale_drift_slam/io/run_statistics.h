@@ -17,7 +17,7 @@ double percentile(std::vector<double> values, double q);
 class StageTimings {
  public:
   void add(const std::string& stage, double ms);
-  /// {"stage": {"median_ms", "p95_ms", "mean_ms", "count"}, ...}
+  /// {"stage": {"median_ms", "p95_ms", "mean_ms", "max_ms", "count"}, ...}
   nlohmann::json toJson() const;
   /// One line per stage: name, median, p95, mean, count.
   std::string table() const;
