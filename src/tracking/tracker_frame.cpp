@@ -20,70 +20,18 @@ double elapsedMs(std::chrono::steady_clock::time_point* last) {
 void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* result) {
   auto clock = std::chrono::steady_clock::now();
   // 1. Motion prior: flow from the previous frame (its map points and the feature candidates).
-  const geometry::SE3 velocity = T_previous_world_ * T_before_previous_world_.inverse();
-  const geometry::SE3 T_guess =
-      state_ == TrackingState::kLost ? T_previous_world_ : velocity * T_previous_world_;
-  std::vector<FlowSeed> seeds;
-  for (const Measurement& m : previous_measurements_) {
-    if (map_.hasPoint(m.id)) {
-      seeds.push_back({cv::Point2f(static_cast<float>(m.px.x()), static_cast<float>(m.px.y())),
-                       map_.point(m.id).p_world});
-    }
-  }
   std::vector<cv::Point2f> candidate_px;
   std::vector<unsigned char> candidate_ok;
-  const MotionPrior prior =
-      motion_prior_.estimate(previous_image_, image, seeds, candidates_.pixels(), T_guess,
-                             last_scene_depth_, *camera_, &candidate_px, &candidate_ok);
+  const MotionPrior prior = estimatePrior(image, &candidate_px, &candidate_ok);
   result->times.flow = elapsedMs(&clock);
-
   // 2-3. Active search for the local map points around the prior.
-  const std::vector<map::PointId> ids =
-      map_.localPoints(prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
-                       params_.local_nearest_keyframes, frame_index_);
-  std::vector<SearchPoint> search_points;
-  search_points.reserve(ids.size());
-  for (const map::PointId id : ids) {
-    const TrackedPoint& point = map_.point(id);
-    const geometry::SE3 T_ref_world = map_.hasKeyframe(point.reference_keyframe)
-                                          ? map_.keyframe(point.reference_keyframe).T_kf_world
-                                          : geometry::SE3();
-    search_points.push_back({point.p_world, T_ref_world, &point.appearance});
-  }
-  const CornerGrid corners = detectSearchCorners(image.base(), params_.search);
-  const std::vector<SearchMatch> matches = activeSearch(
-      search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners, params_.search);
+  std::vector<map::PointId> ids;
+  const std::vector<SearchMatch> matches = searchLocalMap(prior, image, &ids);
   result->times.search = elapsedMs(&clock);
-
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
-  mapping::MotionOnlyInput input;
-  input.T_cam_world_guess = prior.T_cur_world;
-  input.focal_length_px = focal_;
-  std::vector<std::size_t> used;
-  for (std::size_t i = 0; i < matches.size(); ++i) {
-    TrackedPoint& point = map_.point(ids[i]);
-    point.times_visible += matches[i].visible;
-    if (!matches[i].found) continue;
-    ++result->num_found;
-    ++point.times_found;
-    input.observations.push_back({point.p_world, matches[i].xy});
-    used.push_back(i);
-  }
-  for (const SearchMatch& m : matches)
-    result->num_visible += m.visible;
   std::vector<Measurement> inliers;
-  geometry::SE3 T_cam_world = prior.T_cur_world;
-  if (static_cast<int>(used.size()) >= params_.min_inliers) {
-    const mapping::MotionOnlyResult solved =
-        mapping::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
-    T_cam_world = solved.T_cam_world;
-    for (std::size_t k = 0; k < used.size(); ++k) {
-      if (solved.inlier[k])
-        inliers.push_back({ids[used[k]], matches[used[k]].px, matches[used[k]].xy});
-    }
-  }
+  const geometry::SE3 T_cam_world = solvePose(prior, ids, matches, &inliers, result);
   result->times.motion_ba = elapsedMs(&clock);
-  result->num_inliers = static_cast<int>(inliers.size());
 
   previous_image_ = image;
   if (result->num_inliers < params_.min_inliers) {
@@ -103,11 +51,9 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   last_scene_depth_ = sceneDepth(T_cam_world);
   result->has_pose = true;
   result->T_cam_world = T_cam_world;
-
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
   candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
   result->times.filters = elapsedMs(&clock);
-
   // 6. The keyframe rule (only while tracking is good).
   if (state_ == TrackingState::kGood) {
     const KeyframeDecision decision =
@@ -116,6 +62,70 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
     if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
   }
   result->times.keyframe = elapsedMs(&clock);
+}
+
+MotionPrior Tracker::estimatePrior(const ImagePyramid& image,
+                                   std::vector<cv::Point2f>* candidate_px,
+                                   std::vector<unsigned char>* candidate_ok) {
+  const geometry::SE3 velocity = T_previous_world_ * T_before_previous_world_.inverse();
+  const geometry::SE3 T_guess =
+      state_ == TrackingState::kLost ? T_previous_world_ : velocity * T_previous_world_;
+  std::vector<FlowSeed> seeds;
+  for (const Measurement& m : previous_measurements_) {
+    if (map_.hasPoint(m.id)) {
+      seeds.push_back({cv::Point2f(static_cast<float>(m.px.x()), static_cast<float>(m.px.y())),
+                       map_.point(m.id).p_world});
+    }
+  }
+  return motion_prior_.estimate(previous_image_, image, seeds, candidates_.pixels(), T_guess,
+                                last_scene_depth_, *camera_, candidate_px, candidate_ok);
+}
+
+std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
+                                                 const ImagePyramid& image,
+                                                 std::vector<map::PointId>* ids) {
+  *ids = map_.localPoints(prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
+                          params_.local_nearest_keyframes, frame_index_);
+  std::vector<SearchPoint> search_points;
+  search_points.reserve(ids->size());
+  for (const map::PointId id : *ids) {
+    const TrackedPoint& point = map_.point(id);
+    const geometry::SE3 T_ref_world = map_.hasKeyframe(point.reference_keyframe)
+                                          ? map_.keyframe(point.reference_keyframe).T_kf_world
+                                          : geometry::SE3();
+    search_points.push_back({point.p_world, T_ref_world, &point.appearance});
+  }
+  const CornerGrid corners = detectSearchCorners(image.base(), params_.search);
+  return activeSearch(search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners,
+                      params_.search);
+}
+
+geometry::SE3 Tracker::solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
+                                 const std::vector<SearchMatch>& matches,
+                                 std::vector<Measurement>* inliers, FrameResult* result) {
+  mapping::MotionOnlyInput input;
+  input.T_cam_world_guess = prior.T_cur_world;
+  input.focal_length_px = focal_;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    TrackedPoint& point = map_.point(ids[i]);
+    point.times_visible += matches[i].visible;
+    result->num_visible += matches[i].visible;
+    if (!matches[i].found) continue;
+    ++point.times_found;
+    input.observations.push_back({point.p_world, matches[i].xy});
+    used.push_back(i);
+  }
+  result->num_found = static_cast<int>(used.size());
+  if (result->num_found < params_.min_inliers) return prior.T_cur_world;
+  const mapping::MotionOnlyResult solved =
+      mapping::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const SearchMatch& match = matches[used[k]];
+    if (solved.inlier[k]) inliers->push_back({ids[used[k]], match.px, match.xy});
+  }
+  result->num_inliers = static_cast<int>(inliers->size());
+  return solved.T_cam_world;
 }
 
 void Tracker::dropKeyframe(double timestamp, const ImagePyramid& image,

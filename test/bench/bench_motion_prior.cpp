@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
     tracking::OpticalFlowParams params;
   };
   std::vector<Variant> variants;
-  for (const auto& [window, levels] : {std::pair{21, 4}, std::pair{15, 3}, std::pair{11, 3}}) {
+  for (const auto& [window, levels] : {std::pair{21, 4}, std::pair{15, 4}, std::pair{15, 3}, std::pair{11, 3}}) {
     tracking::OpticalFlowParams p;
     p.window = window;
     p.pyramid_levels = levels;

@@ -90,6 +90,14 @@ class Tracker {
 
   void initialise(double timestamp, const ImagePyramid& image, FrameResult* result);
   void track(double timestamp, const ImagePyramid& image, FrameResult* result);
+  MotionPrior estimatePrior(const ImagePyramid& image, std::vector<cv::Point2f>* candidate_px,
+                            std::vector<unsigned char>* candidate_ok);
+  std::vector<SearchMatch> searchLocalMap(const MotionPrior& prior, const ImagePyramid& image,
+                                          std::vector<map::PointId>* ids);
+  /// Motion-only BA on the found matches; fills the inliers and the counts of `result`.
+  geometry::SE3 solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
+                          const std::vector<SearchMatch>& matches,
+                          std::vector<Measurement>* inliers, FrameResult* result);
   void dropKeyframe(double timestamp, const ImagePyramid& image,
                     const std::vector<Measurement>& inliers, FrameResult* result);
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
