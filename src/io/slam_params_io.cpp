@@ -174,7 +174,7 @@ SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
     if (!section.second.IsMap()) fail(origin, "section '" + name + "' must be a mapping");
     for (const auto& entry : section.second) {
       const std::string key = entry.first.as<std::string>();
-      if (!known[name].count(key)) fail(origin, "unknown key '" + name + "." + key + "'");
+      if (!known[name].count(key)) fail(origin, "unknown key '" + name + "." += key + "'");
     }
   }
   for (const Field& field : fields) {

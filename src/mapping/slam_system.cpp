@@ -18,7 +18,7 @@ double focalOf(const std::shared_ptr<const geometry::CameraModel>& camera) {
 
 }  // namespace
 
-SlamSystem::SlamSystem(std::shared_ptr<const geometry::CameraModel> camera,
+SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camera,
                        const SlamParams& params)
     : params_(params), tracker_(camera, params.tracker), mapper_(params.mapper, focalOf(camera)) {
   if (params_.mapping_thread) thread_ = std::thread([this] { mappingLoop(); });

@@ -82,7 +82,7 @@ bool warpTemplate(const PointAppearance& appearance, const Eigen::Matrix2d& A_re
                                std::lround(appearance.px_reference.y() * s) - R);
   const Eigen::Vector2d center = appearance.px_reference * s - origin;
   const Eigen::Matrix2d A = A_ref_cur * s;
-  out->resize((2 * r + 1) * (2 * r + 1));
+  out->resize(static_cast<std::size_t>(2 * r + 1) * static_cast<std::size_t>(2 * r + 1));
   int k = 0;
   for (int dy = -r; dy <= r; ++dy) {
     for (int dx = -r; dx <= r; ++dx) {
@@ -189,7 +189,7 @@ std::vector<Prediction> spread(std::vector<Prediction> predictions,
                                int max_points) {
   if (static_cast<int>(predictions.size()) <= max_points) return predictions;
   constexpr int kCols = 8, kRows = 6;
-  std::vector<std::vector<Prediction>> cells(kCols * kRows);
+  std::vector<std::vector<Prediction>> cells(static_cast<std::size_t>(kCols) * kRows);
   for (const Prediction& p : predictions) {
     const Eigen::Vector2d& px = matches[p.index].predicted_px;
     const int cx = std::clamp(static_cast<int>(px.x() * kCols / width), 0, kCols - 1);

@@ -52,9 +52,8 @@ Eigen::Vector3d triangulateTwoView(const Eigen::Vector2d& xy_first,
 }
 
 double parallaxDeg(const Eigen::Vector3d& p_first, const geometry::SE3& T_second_first) {
-  const Eigen::Vector3d ray_first = p_first;
   const Eigen::Vector3d ray_second = p_first - T_second_first.inverseTranslation();
-  const double c = ray_first.normalized().dot(ray_second.normalized());
+  const double c = p_first.normalized().dot(ray_second.normalized());
   return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI;
 }
 
@@ -218,6 +217,7 @@ TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences
       result.used_homography ? motionsFromHomography(H) : motionsFromEssential(E);
 
   std::vector<Hypothesis> hypotheses;
+  hypotheses.reserve(motions.size());
   for (const geometry::SE3& T : motions)
     hypotheses.push_back(evaluate(T, a, b, inlier, focal, params));
   std::sort(hypotheses.begin(), hypotheses.end(),

@@ -28,7 +28,7 @@ struct SlamParams {
 
 class SlamSystem {
  public:
-  SlamSystem(std::shared_ptr<const geometry::CameraModel> camera, const SlamParams& params);
+  SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camera, const SlamParams& params);
   ~SlamSystem();
   SlamSystem(const SlamSystem&) = delete;
   SlamSystem& operator=(const SlamSystem&) = delete;

@@ -7,6 +7,7 @@
 // inside the region (and at the prediction itself), refined to sub-pixel by a parabola through
 // the NCC scores. Pure functions; called by the tracking thread.
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,7 +38,7 @@ struct ActiveSearchParams {
 /// pixel at pyramid levels 0 and 1, and where they sit.
 struct PointAppearance {
   static constexpr int kPatchRadius = 10;                  ///< Patches of 21 x 21 pixels.
-  cv::Mat patch[2];                                        ///< CV_8UC1, levels 0 and 1.
+  std::array<cv::Mat, 2> patch;                            ///< CV_8UC1, levels 0 and 1.
   Eigen::Vector2d px_reference = Eigen::Vector2d::Zero();  ///< Level-0 pixel in the reference.
   /// Cuts the patches around `px` from `image`. Returns false when too close to the border.
   bool cut(const ImagePyramid& image, const Eigen::Vector2d& px);
