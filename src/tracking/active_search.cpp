@@ -217,6 +217,7 @@ void matchPoint(const SearchPoint& point, const Prediction& prediction,
                 const CornerGrid& corners, const ActiveSearchParams& params,
                 std::vector<float>* templ, std::vector<int>* candidates, SearchMatch* match) {
   const int r = params.template_radius;
+  match->searched = true;
   const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
   if (!warpTemplate(*point.appearance,
                     referenceWarp(camera, prediction.p_ref, prediction.p_cur, T_cur_ref), r,

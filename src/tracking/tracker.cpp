@@ -51,6 +51,10 @@ void TrackerParams::validate() const {
         "local_nearest_keyframes >= 0");
   }
   if (keyframe_corners < 0) throw std::invalid_argument("tracker.keyframe_corners must be >= 0");
+  if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
+    throw std::invalid_argument(
+        "tracker: need retire_after_searches >= 1 and retire_found_ratio in [0, 1]");
+  }
   features.validate();
   initializer.validate();
   motion_prior.validate();

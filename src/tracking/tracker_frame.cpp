@@ -90,6 +90,12 @@ std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
   search_points.reserve(ids->size());
   for (const map::PointId id : *ids) {
     const TrackedPoint& point = map_.point(id);
+    // A point that active search keeps failing on (occluded, on an edge, moving) is retired.
+    if (point.times_searched >= params_.retire_after_searches &&
+        point.times_found < params_.retire_found_ratio * point.times_searched) {
+      search_points.push_back({point.p_world, geometry::SE3(), nullptr});
+      continue;
+    }
     const geometry::SE3 T_ref_world = map_.hasKeyframe(point.reference_keyframe)
                                           ? map_.keyframe(point.reference_keyframe).T_kf_world
                                           : geometry::SE3();
@@ -109,7 +115,7 @@ geometry::SE3 Tracker::solvePose(const MotionPrior& prior, const std::vector<map
   std::vector<std::size_t> used;
   for (std::size_t i = 0; i < matches.size(); ++i) {
     TrackedPoint& point = map_.point(ids[i]);
-    point.times_visible += matches[i].visible;
+    point.times_searched += matches[i].searched;
     result->num_visible += matches[i].visible;
     if (!matches[i].found) continue;
     ++point.times_found;

@@ -58,7 +58,8 @@ struct SearchMatch {
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< Undistorted normalised coordinates.
   Eigen::Vector2d predicted_px = Eigen::Vector2d::Zero();
   double ncc = -1.0;
-  bool visible = false;  ///< Predicted inside the image and in a viewable range.
+  bool visible = false;   ///< Predicted inside the image and in a viewable range.
+  bool searched = false;  ///< Its template was matched (visible and within max_points).
   // A visible point may be left unsearched when more than max_points are visible.
 };
 

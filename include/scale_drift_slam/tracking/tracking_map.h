@@ -23,8 +23,8 @@ struct TrackedPoint {
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   map::KeyframeId reference_keyframe = 0;
   PointAppearance appearance;
-  int times_visible = 0;                  ///< Frames in which it was predicted inside the image.
-  int times_found = 0;                    ///< ...and matched by active search.
+  int times_searched = 0;                 ///< Frames in which active search tried to match it.
+  int times_found = 0;                    ///< ...and matched it.
   std::uint64_t last_selected_frame = 0;  ///< Bookkeeping of localPoints().
 };
 
