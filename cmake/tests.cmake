@@ -75,3 +75,7 @@ foreach(bench_source ${bench_sources})
   target_compile_definitions(${name} PRIVATE SDS_TEST_DATA_DIR="${SDS_TEST_DATA_DIR}")
   add_dependencies(benchmarks ${name})
 endforeach()
+# bench_tracking runs the run_sequence tool.
+if(TARGET bench_tracking)
+  add_dependencies(bench_tracking run_sequence)
+endif()

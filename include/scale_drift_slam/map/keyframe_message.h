@@ -1,0 +1,60 @@
+#pragma once
+// The typed messages between the SLAM's threads (offline) or nodes (ROS): the tracker emits a
+// KeyframeMessage for every keyframe it drops; the mapper answers with MapUpdates (window BA
+// results, later loop corrections). Plain values: they are copied or moved across a queue
+// (map/message_queue.h) or converted to ROS messages (src/ros/), never shared by pointer.
+
+#include <cstdint>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/geometry/sim3.h"
+#include "scale_drift_slam/map/map.h"
+
+namespace scale_drift_slam::map {
+
+/// An observation of a point in a keyframe other than the message's own (normalised xy).
+struct KeyframeObservation {
+  KeyframeId keyframe_id = 0;
+  PointId point_id = 0;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+};
+
+/// A point the tracker promoted to the map at this keyframe.
+struct NewMapPoint {
+  PointId id = 0;
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  KeyframeId reference_keyframe = 0;
+};
+
+/// Everything the mapper and the loop closer learn about a new keyframe.
+struct KeyframeMessage {
+  /// Id, stamp, pose T_kf_world and the keyframe's observations (of old and new points).
+  Keyframe keyframe;
+  /// Points promoted at this keyframe (add them before the keyframe's observations).
+  std::vector<NewMapPoint> new_points;
+  /// Observations of the new points in earlier keyframes (e.g. the feature's origin keyframe).
+  std::vector<KeyframeObservation> earlier_observations;
+  /// For place recognition: the grey image and its spread corners (pixels).
+  cv::Mat image;
+  std::vector<Eigen::Vector2d> corners_px;
+};
+
+/// A correction of the tracker's map by the mapper. Applied by the tracker at the start of its
+/// next frame; `map_version` orders updates (older ones are ignored).
+struct MapUpdate {
+  std::uint64_t map_version = 0;
+  /// Applied first, to every keyframe and point of the tracker's map (loop closure): maps old
+  /// world coordinates into corrected ones. Absent for window BA results.
+  std::optional<geometry::Sim3> S_new_old;
+  std::vector<std::pair<KeyframeId, geometry::SE3>> keyframe_poses;  ///< T_kf_world.
+  std::vector<std::pair<PointId, Eigen::Vector3d>> point_positions;  ///< p_world.
+  std::vector<PointId> removed_points;  ///< Dropped by the mapper (outliers).
+};
+
+}  // namespace scale_drift_slam::map

@@ -1,0 +1,68 @@
+#pragma once
+// A small thread-safe FIFO between the SLAM's threads (tracking -> mapping keyframes, mapping ->
+// tracking map updates). push() never blocks, so the camera thread never waits; the consumer
+// either polls (tryPop) or sleeps until an item or close() arrives (waitPop). Shared by the two
+// threads through a std::shared_ptr or a reference owned by their common parent.
+
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <optional>
+
+namespace scale_drift_slam::map {
+
+template <typename T>
+class MessageQueue {
+ public:
+  /// Adds an item; ignored (returns false) after close().
+  bool push(T item) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (closed_) return false;
+      items_.push_back(std::move(item));
+    }
+    ready_.notify_one();
+    return true;
+  }
+
+  /// The oldest item, or nothing when the queue is empty. Never blocks on an empty queue.
+  std::optional<T> tryPop() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (items_.empty()) return std::nullopt;
+    T item = std::move(items_.front());
+    items_.pop_front();
+    return item;
+  }
+
+  /// Waits for an item; returns nothing once the queue is closed and drained.
+  std::optional<T> waitPop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait(lock, [this] { return closed_ || !items_.empty(); });
+    if (items_.empty()) return std::nullopt;
+    T item = std::move(items_.front());
+    items_.pop_front();
+    return item;
+  }
+
+  /// No more pushes; waiting consumers drain what is left and then get nothing.
+  void close() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+    }
+    ready_.notify_all();
+  }
+
+  std::size_t size() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return items_.size();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<T> items_;
+  bool closed_ = false;
+};
+
+}  // namespace scale_drift_slam::map

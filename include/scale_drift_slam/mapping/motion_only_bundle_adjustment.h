@@ -1,0 +1,63 @@
+#pragma once
+// Motion-only bundle adjustment (paper/ALGORITHM.md, "Front-end: tracking one frame", step 4):
+// minimise sum rho(|f (z_k - proj(T x_k))|) over one camera pose T with the points held fixed,
+// Levenberg-Marquardt and the pseudo-Huber kernel rho.
+//
+// Two solvers give the same answer: a hand-written LM with the analytic 2x6 Jacobian and
+// iteratively reweighted normal equations (the default: ~20 us for 300 points), and Ceres (DENSE_QR
+// on the 6 parameters, kept to measure against: its per-problem set-up costs ~10x more,
+// doc/benchmarks.md). Pure function of its input; safe to call from any thread.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/mapping/window_bundle_adjustment.h"
+
+namespace scale_drift_slam::mapping {
+
+enum class MotionOnlySolver { kHandWritten, kCeres };
+
+struct MotionOnlyBundleAdjustmentParams {
+  double huber_width_px = 2.0;       ///< b of the pseudo-Huber kernel, in pixels.
+  double inlier_threshold_px = 3.0;  ///< Observations with a larger final error are outliers.
+  int max_iterations = 10;
+  /// Stop when the update's norm (radians and map units) falls below this.
+  double min_step_norm = 1e-9;
+  /// Stop when the relative cost decrease of an accepted step falls below this.
+  double function_tolerance = 1e-8;
+  MotionOnlySolver solver = MotionOnlySolver::kHandWritten;
+  /// Throws std::invalid_argument naming the first bad value.
+  void validate() const;
+};
+
+/// A fixed world point and its observation in undistorted normalised coordinates.
+struct PoseObservation {
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+};
+
+struct MotionOnlyInput {
+  geometry::SE3 T_cam_world_guess;
+  std::vector<PoseObservation> observations;
+  double focal_length_px = 0.0;
+  /// Throws std::invalid_argument for a non-positive focal length or non-finite values.
+  void validate() const;
+};
+
+struct MotionOnlyResult {
+  geometry::SE3 T_cam_world;
+  std::vector<bool> inlier;  ///< Per input observation.
+  BundleStatistics statistics;
+  /// sum w_k J_k^T J_k at the solution (pixel residuals, left-update tangent (omega, upsilon)):
+  /// divided by the pixel noise variance it is the inverse covariance of the pose.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
+/// Needs at least 3 observations in front of the camera (throws std::invalid_argument otherwise).
+MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
+                                                 const MotionOnlyBundleAdjustmentParams& params);
+
+}  // namespace scale_drift_slam::mapping

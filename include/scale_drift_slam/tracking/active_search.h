@@ -1,0 +1,89 @@
+#pragma once
+// Active search for map points in a new frame (paper/ALGORITHM.md, "Front-end: tracking one
+// frame", step 3): predict each point's pixel from the prior pose T^(0), bound the search region
+// by the innovation covariance Sigma_z = J Sigma_Delta J^T + sigma^2 I (J = d pixel / d pose,
+// Sigma_Delta the prior's uncertainty), warp the point's template from its reference keyframe
+// into the current view, and match it by normalised cross-correlation (NCC) at the FAST corners
+// inside the region (and at the prediction itself), refined to sub-pixel by a parabola through
+// the NCC scores. Pure functions; called by the tracking thread.
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/tracking/feature_detection.h"
+#include "scale_drift_slam/tracking/image_preparation.h"
+
+namespace scale_drift_slam::tracking {
+
+struct ActiveSearchParams {
+  int template_radius = 4;           ///< Template of (2r+1)^2 pixels.
+  double min_ncc = 0.8;              ///< Accept a match above this score.
+  double gate_chi2 = 9.21;           ///< Mahalanobis gate of the region (99% of chi2, 2 dof).
+  double pixel_sigma_px = 1.0;       ///< sigma of the image measurement in Sigma_z.
+  double min_radius_px = 3.0;        ///< The region is at least this large...
+  double max_radius_px = 40.0;       ///< ...and at most this.
+  int fast_threshold = 8;            ///< FAST threshold of the candidate corners in a frame.
+  double max_scale_change = 3.0;     ///< Skip points seen this much larger/smaller than in the ref.
+  double max_view_angle_deg = 60.0;  ///< Skip points seen this far off their reference direction.
+  int max_points = 300;  ///< Match at most this many visible points, spread over the image.
+  void validate() const;
+};
+
+/// A point's appearance, cut from its reference keyframe at creation: square patches around its
+/// pixel at pyramid levels 0 and 1, and where they sit.
+struct PointAppearance {
+  static constexpr int kPatchRadius = 10;                  ///< Patches of 21 x 21 pixels.
+  std::array<cv::Mat, 2> patch;                            ///< CV_8UC1, levels 0 and 1.
+  Eigen::Vector2d px_reference = Eigen::Vector2d::Zero();  ///< Level-0 pixel in the reference.
+  /// Cuts the patches around `px` from `image`. Returns false when too close to the border.
+  bool cut(const ImagePyramid& image, const Eigen::Vector2d& px);
+  bool empty() const { return patch[0].empty(); }
+};
+
+/// What active search needs of one map point.
+struct SearchPoint {
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  geometry::SE3 T_ref_world;  ///< Pose of the keyframe the appearance was cut from.
+  const PointAppearance* appearance = nullptr;
+};
+
+struct SearchMatch {
+  bool found = false;
+  Eigen::Vector2d px = Eigen::Vector2d::Zero();  ///< Measured pixel (raw image).
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< Undistorted normalised coordinates.
+  Eigen::Vector2d predicted_px = Eigen::Vector2d::Zero();
+  double ncc = -1.0;
+  bool visible = false;   ///< Predicted inside the image and in a viewable range.
+  bool searched = false;  ///< Its template was matched (visible and within max_points).
+  // A visible point may be left unsearched when more than max_points are visible.
+};
+
+/// The affine map taking pixel offsets around the point's projection in the current camera to
+/// pixel offsets around its projection in the reference camera, for the plane through the point
+/// parallel to the reference image plane: A_ref_cur = (J_cur R_cur_ref[:, 0:2] J_ref2^-1)^-1,
+/// J the camera's projection Jacobians, J_ref2 its first two columns.
+Eigen::Matrix2d referenceWarp(const geometry::CameraModel& camera, const Eigen::Vector3d& p_ref,
+                              const Eigen::Vector3d& p_cur, const geometry::SE3& T_cur_ref);
+
+/// Searches every point; `corners` are the FAST corners of the current frame (see
+/// detectSearchCorners). Sigma_Delta is the 6x6 covariance of the prior pose in the left-update
+/// tangent (omega, upsilon).
+std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
+                                      const geometry::SE3& T_cur_world_prior,
+                                      const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
+                                      const geometry::CameraModel& camera,
+                                      const ImagePyramid& image, const CornerGrid& corners,
+                                      const ActiveSearchParams& params);
+
+/// The FAST corners of a frame for active search, bucketed for region queries.
+CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params);
+
+/// NCC of two equally sized float patches, in [-1, 1]; -1 when either has no texture.
+double normalizedCrossCorrelation(const float* a, const float* b, int n);
+
+}  // namespace scale_drift_slam::tracking

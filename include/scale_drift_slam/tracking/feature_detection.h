@@ -1,0 +1,53 @@
+#pragma once
+// FAST corners (OpenCV) spread evenly over the image by a quadtree (paper/ALGORITHM.md, "feature
+// initialisation": candidates "spread evenly over the image with a quadtree"), and a bucket grid
+// over the corners of a frame so that active search can ask for the corners inside a region.
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace scale_drift_slam::tracking {
+
+struct FeatureDetectionParams {
+  int fast_threshold = 20;     ///< FAST intensity threshold for new features.
+  int min_fast_threshold = 7;  ///< Retried with this when the first pass finds too few.
+  int border = 12;             ///< Corners closer than this to the image border are dropped.
+  double min_distance = 12.0;  ///< New corners keep this distance (px) from existing features.
+  void validate() const;
+};
+
+/// FAST corners (non-maximum suppressed) at least `border` pixels inside the image.
+std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int border);
+
+/// Up to `max_features` corners spread over the image: the image is split recursively into
+/// quadrants (always the cell holding the most corners first) until there are `max_features`
+/// cells or no cell holds more than one corner; each cell keeps its strongest corner. Corners
+/// closer than `params.min_distance` to a pixel of `occupied` are dropped first.
+std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_features,
+                                              const FeatureDetectionParams& params,
+                                              const std::vector<Eigen::Vector2d>& occupied = {});
+
+/// The quadtree selection alone (exposed for tests): keeps at most `max_features` of `corners`,
+/// one per cell, inside the rectangle [0, width) x [0, height).
+std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& corners,
+                                             int max_features, int width, int height);
+
+/// The corners of one frame bucketed into square cells for region queries. Immutable once built.
+class CornerGrid {
+ public:
+  CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size = 16);
+  /// Indices of the corners within the axis-aligned box |x - cx| <= rx, |y - cy| <= ry.
+  void query(const Eigen::Vector2d& center, double rx, double ry, std::vector<int>* indices) const;
+  const std::vector<cv::KeyPoint>& corners() const { return corners_; }
+
+ private:
+  std::vector<cv::KeyPoint> corners_;
+  int cell_size_;
+  int cols_;
+  int rows_;
+  std::vector<std::vector<int>> cells_;
+};
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,51 @@
+#pragma once
+// Turning a camera image, in whatever encoding it arrives, into the 8-bit grey image pyramid the
+// front-end works on. ROS-free: encodings are named by the strings of sensor_msgs/Image
+// ("mono8", "bgr8", ...) but parsed into an enum here. Undistortion is not done on the image:
+// features are found in the raw image and undistorted as coordinates through the camera model
+// (geometry/camera_model.h), which costs nothing per pixel and keeps the image noise untouched.
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace scale_drift_slam::tracking {
+
+/// Pixel layouts accepted from cameras and bags (sensor_msgs/image_encodings names).
+enum class PixelEncoding { kMono8, kMono16, kBgr8, kRgb8, kBgra8, kRgba8 };
+
+/// Parses "mono8", "mono16", "bgr8", "rgb8", "bgra8", "rgba8" (also "8UC1" = mono8, "16UC1" =
+/// mono16, "8UC3" = bgr8). Throws std::invalid_argument naming the accepted encodings.
+PixelEncoding parsePixelEncoding(const std::string& name);
+std::string pixelEncodingName(PixelEncoding encoding);
+/// The encoding of an OpenCV image by its type: CV_8UC1 mono8, CV_16UC1 mono16, CV_8UC3 bgr8,
+/// CV_8UC4 bgra8 (OpenCV's own channel order). Throws std::invalid_argument for other types.
+PixelEncoding encodingOfMat(const cv::Mat& image);
+
+/// An 8-bit grey copy of `image`, read as `encoding`. mono16 is scaled by 1/256 (full 16-bit
+/// range to 8 bits). Throws std::invalid_argument when the image is empty or its type does not
+/// match the encoding (a 3-channel image announced as mono8, a 16-bit image announced as bgr8).
+cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding);
+
+/// A grey image and its pyramid: level 0 is the image itself, each further level halves it
+/// (cv::pyrDown, Gaussian 5x5). Levels stop early when the image gets smaller than 32 pixels.
+/// Every level is an ROI inside a padded buffer, as cv::calcOpticalFlowPyrLK wants it.
+struct ImagePyramid {
+  std::vector<cv::Mat> levels;
+  const cv::Mat& base() const { return levels.front(); }
+  int numLevels() const { return static_cast<int>(levels.size()); }
+};
+
+/// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
+/// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
+/// or non-grey image.
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
+
+/// Why a frame cannot be used, or "" when it can: empty, a size other than the calibration's,
+/// or (after grey conversion) without texture (the standard deviation of the grey values below
+/// `min_contrast`, e.g. a black or blank frame).
+std::string frameProblem(const cv::Mat& grey, int expected_width, int expected_height,
+                         double min_contrast);
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,43 @@
+#pragma once
+// The keyframe rule (paper/ALGORITHM.md, "Front-end: keyframe dropping"): drop a new keyframe as
+// soon as the distance from the current camera to the closest keyframe exceeds a threshold. The
+// map's scale drifts, so the threshold is a fraction of the scene depth (the median depth of the
+// points the camera tracks), not a fixed distance. Pure functions; any thread.
+
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/map/map.h"
+
+namespace scale_drift_slam::tracking {
+
+struct KeyframeRuleParams {
+  /// Drop when the distance to the closest keyframe exceeds this fraction of the scene depth.
+  double distance_to_depth_ratio = 0.1;
+  /// Throws std::invalid_argument naming the bad value.
+  void validate() const;
+};
+
+struct KeyframeDecision {
+  bool drop = false;
+  double distance = 0.0;   ///< To the closest keyframe (map units); infinity when there is none.
+  double threshold = 0.0;  ///< distance_to_depth_ratio * scene depth.
+  map::KeyframeId closest = 0;
+};
+
+/// The median depth (z in the camera) of the given world points that lie in front of the camera.
+/// Throws std::invalid_argument when none does.
+double medianSceneDepth(const geometry::SE3& T_cam_world,
+                        const std::vector<Eigen::Vector3d>& points_world);
+
+/// Applies the rule. `keyframe_centres` are (id, camera centre in the world); with none, the
+/// decision is to drop. Throws std::invalid_argument for a non-positive or non-finite depth.
+KeyframeDecision decideKeyframe(
+    const Eigen::Vector3d& camera_centre_world,
+    const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
+    double scene_depth, const KeyframeRuleParams& params);
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,81 @@
+#pragma once
+// Automatic map initialisation from the first frames of a sequence (paper/ALGORITHM.md,
+// "Front-end"): corners of a reference frame are tracked frame to frame with pyramidal
+// Lucas-Kanade; once they have moved enough, reconstructTwoView (two_view_reconstruction.h)
+// tries to build the initial map. A refusal (too little parallax, pure rotation, ambiguity) just
+// waits for more motion; when too few tracks survive or too many frames pass, the reference is
+// replaced by the current frame. Owned and run by the tracking thread.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/tracking/feature_detection.h"
+#include "scale_drift_slam/tracking/image_preparation.h"
+#include "scale_drift_slam/tracking/optical_flow.h"
+#include "scale_drift_slam/tracking/two_view_reconstruction.h"
+
+namespace scale_drift_slam::tracking {
+
+struct InitializerParams {
+  TwoViewParams two_view;
+  int num_features = 500;          ///< Corners tracked from the reference frame.
+  int min_tracks = 80;             ///< Below this many surviving tracks, start again.
+  double min_disparity_px = 20.0;  ///< Median corner motion before a reconstruction is tried.
+  int max_frames = 60;             ///< Replace the reference after this many frames.
+  void validate() const;
+};
+
+/// The two views the map starts from. The first view is the world frame; the scale is median
+/// depth 1 in it. Per correspondence: raw pixels, normalised coordinates and (where
+/// `triangulated`) the point.
+struct InitialMap {
+  double first_timestamp = 0.0;
+  double second_timestamp = 0.0;
+  geometry::SE3 T_second_first;
+  std::vector<Eigen::Vector2d> px_first, px_second;
+  std::vector<Eigen::Vector2d> xy_first, xy_second;
+  std::vector<Eigen::Vector3d> p_first;
+  std::vector<bool> triangulated;
+  ImagePyramid first_image, second_image;
+  bool used_homography = false;
+  double median_parallax_deg = 0.0;
+};
+
+class MapInitializer {
+ public:
+  /// `flow` gives the Lucas-Kanade window and levels (the pyramids are padded for that window);
+  /// the initializer always uses Lucas-Kanade with a forward-backward check.
+  MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
+                 const InitializerParams& params, const FeatureDetectionParams& features,
+                 const OpticalFlowParams& flow = {});
+
+  /// Feeds the next frame; returns the initial map once two views reconstruct.
+  std::optional<InitialMap> addFrame(double timestamp, const ImagePyramid& image);
+  /// Starts over with the next frame as the reference.
+  void reset();
+  /// Why the last frame did not initialise (for logs).
+  const std::string& status() const { return status_; }
+  int numTracks() const { return static_cast<int>(current_px_.size()); }
+
+ private:
+  void startReference(double timestamp, const ImagePyramid& image);
+
+  std::shared_ptr<const geometry::CameraModel> camera_;
+  InitializerParams params_;
+  FeatureDetectionParams features_;
+  OpticalFlow flow_;
+  bool has_reference_ = false;
+  double reference_timestamp_ = 0.0;
+  ImagePyramid reference_image_, previous_image_;
+  std::vector<cv::Point2f> reference_px_, current_px_;
+  int frames_since_reference_ = 0;
+  std::string status_ = "no frame yet";
+};
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,70 @@
+#pragma once
+// The initial pose guess of a frame (paper/ALGORITHM.md, "Front-end: tracking one frame", step
+// 1): optical flow carries the previous frame's matched map points into the current image, and a
+// motion-only bundle adjustment on those 2D-3D pairs gives T_i^(0) = Delta T_{i-1} together with
+// its uncertainty Sigma_Delta = sigma_flow^2 (J^T J)^-1 (plus a floor), which bounds the active
+// search regions. Without enough flow tracks it falls back to a constant-velocity guess with a
+// wide uncertainty. Owned by the tracker; single-threaded.
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
+#include "scale_drift_slam/tracking/image_preparation.h"
+#include "scale_drift_slam/tracking/optical_flow.h"
+
+namespace scale_drift_slam::tracking {
+
+struct MotionPriorParams {
+  OpticalFlowParams flow;
+  double flow_sigma_px = 0.5;               ///< Noise of a flow track (pixels).
+  int min_tracks = 12;                      ///< Fewer flow tracks: constant-velocity fallback.
+  int max_tracks = 150;                     ///< At most this many map points are flowed (evenly).
+  double min_rotation_sigma = 0.002;        ///< Floor of Sigma_Delta (radians).
+  double min_translation_sigma = 0.005;     ///< Floor of Sigma_Delta (fraction of the scene depth).
+  double fallback_rotation_sigma = 0.05;    ///< Sigma_Delta of the fallback (radians).
+  double fallback_translation_sigma = 0.1;  ///< ...(fraction of the scene depth).
+  void validate() const;
+};
+
+struct MotionPrior {
+  geometry::SE3 T_cur_world;
+  Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Identity();
+  bool from_flow = false;
+  int num_tracks = 0;  ///< Flow tracks used.
+};
+
+/// The previous frame's measurements the flow carries over: pixel and the map point.
+struct FlowSeed {
+  cv::Point2f px;
+  Eigen::Vector3d p_world;
+};
+
+class MotionPriorEstimator {
+ public:
+  MotionPriorEstimator(const MotionPriorParams& params,
+                       const mapping::MotionOnlyBundleAdjustmentParams& motion_ba);
+
+  /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
+  /// `extra_tracked` / `extra_ok`) from `previous` into `current` in one flow call and estimates
+  /// the prior. `T_guess` is the constant-velocity guess, `scene_depth` scales the floors.
+  MotionPrior estimate(const ImagePyramid& previous, const ImagePyramid& current,
+                       const std::vector<FlowSeed>& seeds, const std::vector<cv::Point2f>& extra_px,
+                       const geometry::SE3& T_guess, double scene_depth,
+                       const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
+                       std::vector<unsigned char>* extra_ok);
+
+  /// The fallback: the guess with the wide uncertainty.
+  MotionPrior fallback(const geometry::SE3& T_guess, double scene_depth) const;
+
+ private:
+  MotionPriorParams params_;
+  mapping::MotionOnlyBundleAdjustmentParams motion_ba_;
+  OpticalFlow flow_;
+};
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,62 @@
+#pragma once
+// Optical flow from the previous frame to the current one, the source of the motion prior
+// (paper/ALGORITHM.md, "Front-end: tracking one frame", step 1: the paper used dense variational
+// flow on a GPU). Two methods behind one call, chosen by accuracy per millisecond
+// (doc/frontend.md, bench_motion_prior): pyramidal Lucas-Kanade at the given points (default)
+// and OpenCV's dense DIS flow sampled at the points. Not thread-safe (DIS keeps state); one per
+// tracker.
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "scale_drift_slam/tracking/image_preparation.h"
+
+namespace scale_drift_slam::tracking {
+
+enum class FlowMethod { kLucasKanade, kDis };
+/// "lucas_kanade" (or "lk") and "dis". Throws std::invalid_argument otherwise.
+FlowMethod parseFlowMethod(const std::string& name);
+std::string flowMethodName(FlowMethod method);
+
+struct OpticalFlowParams {
+  FlowMethod method = FlowMethod::kLucasKanade;
+  int window = 15;          ///< Lucas-Kanade window (pixels, odd).
+  int pyramid_levels = 4;   ///< Levels used by Lucas-Kanade (1 = no pyramid).
+  int max_iterations = 20;  ///< Lucas-Kanade iterations per level.
+  double max_error = 30.0;  ///< Lucas-Kanade: drop points whose mean patch error is larger.
+  /// Drop points whose backward flow misses the start by more than this (pixels); <= 0 skips the
+  /// backward check (it doubles the cost).
+  double max_forward_backward_px = 0.0;
+  int dis_preset = 0;  ///< DIS: 0 ultrafast, 1 fast, 2 medium.
+  void validate() const;
+};
+
+class OpticalFlow {
+ public:
+  explicit OpticalFlow(const OpticalFlowParams& params);
+
+  /// Moves `from` (pixels in `previous`) into `current`; `ok[i]` says whether point i was
+  /// tracked (inside the image, converged, consistent). Outputs have the size of `from`.
+  void track(const ImagePyramid& previous, const ImagePyramid& current,
+             const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
+             std::vector<unsigned char>* ok);
+
+  const OpticalFlowParams& params() const { return params_; }
+
+ private:
+  void trackLucasKanade(const ImagePyramid& previous, const ImagePyramid& current,
+                        const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
+                        std::vector<unsigned char>* ok) const;
+  void trackDis(const ImagePyramid& previous, const ImagePyramid& current,
+                const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
+                std::vector<unsigned char>* ok);
+
+  OpticalFlowParams params_;
+  cv::Ptr<cv::DISOpticalFlow> dis_;
+  cv::Mat flow_;  ///< DIS output, reused between frames.
+};
+
+}  // namespace scale_drift_slam::tracking

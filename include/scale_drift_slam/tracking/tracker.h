@@ -1,0 +1,127 @@
+#pragma once
+// The front-end (paper/ALGORITHM.md, "Front-end"): turns frames into camera poses and keyframes.
+// Per frame: grey conversion and pyramid, then either map initialisation (MapInitializer) or
+// tracking: motion prior from optical flow, active search for the local map points, motion-only
+// BA with the pseudo-Huber kernel, a quality verdict (good / weak / lost), the inverse-depth
+// filters of the new features, and the keyframe rule. Keyframes leave as map::KeyframeMessage;
+// corrections come back as map::MapUpdate (applyMapUpdate), applied between frames.
+// Runs on one thread (the tracking thread or node); owns its TrackingMap copy and never blocks.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/map/keyframe_message.h"
+#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
+#include "scale_drift_slam/tracking/active_search.h"
+#include "scale_drift_slam/tracking/feature_candidates.h"
+#include "scale_drift_slam/tracking/keyframe_rule.h"
+#include "scale_drift_slam/tracking/map_initializer.h"
+#include "scale_drift_slam/tracking/motion_prior.h"
+#include "scale_drift_slam/tracking/tracking_map.h"
+
+namespace scale_drift_slam::tracking {
+
+struct TrackerParams {
+  int pyramid_levels = 4;
+  double min_contrast = 3.0;        ///< Frames with a smaller grey-level std are unusable.
+  int good_inliers = 50;            ///< Inliers for "good" tracking (keyframes only then).
+  int min_inliers = 15;             ///< Below: lost.
+  int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
+  int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera.
+  int keyframe_corners = 300;       ///< Corners stored with a keyframe for place recognition.
+  int retire_after_searches = 10;   ///< Points searched this often...
+  double retire_found_ratio = 0.3;  ///< ...and found less than this share are not searched.
+  FeatureDetectionParams features;
+  InitializerParams initializer;
+  MotionPriorParams motion_prior;
+  ActiveSearchParams search;
+  mapping::MotionOnlyBundleAdjustmentParams motion_ba;
+  FeatureCandidateParams candidates;
+  KeyframeRuleParams keyframes;
+  /// Throws std::invalid_argument naming the first bad value.
+  void validate() const;
+};
+
+enum class TrackingState { kInitializing, kGood, kWeak, kLost };
+std::string trackingStateName(TrackingState state);
+
+/// Milliseconds spent in each stage of one frame (0 when the stage did not run).
+/// `cpu` is the tracking thread's CPU time for the whole frame (unaffected by other processes).
+struct StageTimes {
+  double prepare = 0, flow = 0, search = 0, motion_ba = 0, filters = 0, keyframe = 0, total = 0;
+  double cpu = 0;
+};
+
+struct FrameResult {
+  double timestamp = 0.0;
+  TrackingState state = TrackingState::kInitializing;
+  bool rejected = false;  ///< The frame itself was unusable (see message).
+  bool has_pose = false;  ///< T_cam_world is an estimate for this frame.
+  geometry::SE3 T_cam_world;
+  int num_visible = 0, num_found = 0, num_inliers = 0;
+  std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
+  StageTimes times;
+  std::string message;
+};
+
+class Tracker {
+ public:
+  Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params);
+
+  /// Processes one frame. Never throws for a bad frame (black, blank, wrong size, wrong
+  /// encoding): the result says it was rejected and why.
+  FrameResult processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding);
+  /// Applies a mapper correction to the local map (call between frames).
+  void applyMapUpdate(const map::MapUpdate& update);
+
+  TrackingState state() const { return state_; }
+  const TrackingMap& trackingMap() const { return map_; }
+  std::size_t numCandidates() const { return candidates_.size(); }
+
+ private:
+  struct Measurement {  ///< A map point found in the last frame (seed of the next flow).
+    map::PointId id;
+    Eigen::Vector2d px;
+    Eigen::Vector2d xy;
+  };
+
+  void initialise(double timestamp, const ImagePyramid& image, FrameResult* result);
+  void track(double timestamp, const ImagePyramid& image, FrameResult* result);
+  MotionPrior estimatePrior(const ImagePyramid& image, std::vector<cv::Point2f>* candidate_px,
+                            std::vector<unsigned char>* candidate_ok);
+  std::vector<SearchMatch> searchLocalMap(const MotionPrior& prior, const ImagePyramid& image,
+                                          std::vector<map::PointId>* ids);
+  /// Motion-only BA on the found matches; fills the inliers and the counts of `result`.
+  geometry::SE3 solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
+                          const std::vector<SearchMatch>& matches,
+                          std::vector<Measurement>* inliers, FrameResult* result);
+  void dropKeyframe(double timestamp, const ImagePyramid& image,
+                    const std::vector<Measurement>& inliers, FrameResult* result);
+  map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
+                                    const ImagePyramid& image);
+  double sceneDepth(const geometry::SE3& T_cam_world) const;
+
+  std::shared_ptr<const geometry::CameraModel> camera_;
+  TrackerParams params_;
+  double focal_;
+  MapInitializer initializer_;
+  MotionPriorEstimator motion_prior_;
+  FeatureCandidates candidates_;
+  TrackingMap map_;
+  TrackingState state_ = TrackingState::kInitializing;
+
+  ImagePyramid previous_image_;
+  geometry::SE3 T_previous_world_, T_before_previous_world_;
+  std::vector<Measurement> previous_measurements_;
+  double last_scene_depth_ = 1.0;
+  std::uint64_t frame_index_ = 0;
+  map::KeyframeId next_keyframe_id_ = 0;
+  map::PointId next_point_id_ = 0;
+};
+
+}  // namespace scale_drift_slam::tracking

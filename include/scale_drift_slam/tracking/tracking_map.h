@@ -1,0 +1,73 @@
+#pragma once
+// The tracker's own copy of the map: the keyframe poses and the points it searches for, each
+// point with its appearance (patches from its reference keyframe). The mapper owns the global map
+// and corrects this copy through map::MapUpdate messages, applied by the tracking thread between
+// frames, so tracking never waits for a lock. Owned by the Tracker; single-threaded.
+
+#include <cstdint>
+#include <map>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/map/keyframe_message.h"
+#include "scale_drift_slam/map/map.h"
+#include "scale_drift_slam/tracking/active_search.h"
+
+namespace scale_drift_slam::tracking {
+
+struct TrackedPoint {
+  map::PointId id = 0;
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  map::KeyframeId reference_keyframe = 0;
+  PointAppearance appearance;
+  int times_searched = 0;                 ///< Frames in which active search tried to match it.
+  int times_found = 0;                    ///< ...and matched it.
+  std::uint64_t last_selected_frame = 0;  ///< Bookkeeping of localPoints().
+};
+
+struct TrackedKeyframe {
+  map::KeyframeId id = 0;
+  double timestamp = 0.0;
+  geometry::SE3 T_kf_world;
+  std::vector<map::PointId> points;  ///< Points it observes (or is the reference of).
+};
+
+class TrackingMap {
+ public:
+  void addKeyframe(TrackedKeyframe keyframe);
+  void addPoint(TrackedPoint point);
+  /// Records that a keyframe sees a point (for the selection of local points).
+  void linkPoint(map::KeyframeId keyframe, map::PointId point);
+
+  /// Applies a mapper correction: the optional similarity first, then poses and positions of
+  /// known ids, then removals. Updates older than the last applied version are ignored.
+  /// Returns false when ignored.
+  bool apply(const map::MapUpdate& update);
+
+  /// The points of the `num_recent` newest keyframes and of the `num_nearest` keyframes whose
+  /// centres are closest to `camera_centre`, each once (ids). `frame` stamps the selection.
+  std::vector<map::PointId> localPoints(const Eigen::Vector3d& camera_centre, int num_recent,
+                                        int num_nearest, std::uint64_t frame);
+  /// Keyframe centres (id, centre in the world) for the keyframe rule.
+  std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframeCentres() const;
+
+  bool hasPoint(map::PointId id) const { return points_.count(id) != 0; }
+  bool hasKeyframe(map::KeyframeId id) const { return keyframes_.count(id) != 0; }
+  TrackedPoint& point(map::PointId id) { return points_.at(id); }
+  const TrackedPoint& point(map::PointId id) const { return points_.at(id); }
+  const TrackedKeyframe& keyframe(map::KeyframeId id) const { return keyframes_.at(id); }
+  const std::map<map::KeyframeId, TrackedKeyframe>& keyframes() const { return keyframes_; }
+  std::size_t numPoints() const { return points_.size(); }
+  std::size_t numKeyframes() const { return keyframes_.size(); }
+  std::uint64_t version() const { return version_; }
+
+ private:
+  std::map<map::KeyframeId, TrackedKeyframe> keyframes_;
+  std::unordered_map<map::PointId, TrackedPoint> points_;
+  std::uint64_t version_ = 0;
+};
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,227 @@
+#include "scale_drift_slam/io/slam_params_io.h"
+
+#include <algorithm>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <variant>
+
+#include <yaml-cpp/yaml.h>
+
+namespace scale_drift_slam::io {
+namespace {
+
+using mapping::SlamParams;
+
+/// A named parameter: where it lives in the struct and how to read/print it.
+struct Field {
+  std::string section, key;
+  std::variant<int*, double*, bool*> value;
+  /// For enums kept as text: the parser and the printer.
+  std::function<void(const std::string&)> parse_text;
+  std::function<std::string()> print_text;
+};
+
+std::vector<Field> fieldsOf(SlamParams& p) {
+  auto& t = p.tracker;
+  std::vector<Field> f = {
+      {"tracker", "pyramid_levels", &t.pyramid_levels},
+      {"tracker", "min_contrast", &t.min_contrast},
+      {"tracker", "good_inliers", &t.good_inliers},
+      {"tracker", "min_inliers", &t.min_inliers},
+      {"tracker", "local_recent_keyframes", &t.local_recent_keyframes},
+      {"tracker", "local_nearest_keyframes", &t.local_nearest_keyframes},
+      {"tracker", "keyframe_corners", &t.keyframe_corners},
+      {"tracker", "retire_after_searches", &t.retire_after_searches},
+      {"tracker", "retire_found_ratio", &t.retire_found_ratio},
+      {"features", "fast_threshold", &t.features.fast_threshold},
+      {"features", "min_fast_threshold", &t.features.min_fast_threshold},
+      {"features", "border", &t.features.border},
+      {"features", "min_distance", &t.features.min_distance},
+      {"initializer", "num_features", &t.initializer.num_features},
+      {"initializer", "min_tracks", &t.initializer.min_tracks},
+      {"initializer", "min_disparity_px", &t.initializer.min_disparity_px},
+      {"initializer", "max_frames", &t.initializer.max_frames},
+      {"initializer", "ransac_threshold_px", &t.initializer.two_view.ransac_threshold_px},
+      {"initializer", "sigma_px", &t.initializer.two_view.sigma_px},
+      {"initializer", "max_reprojection_px", &t.initializer.two_view.max_reprojection_px},
+      {"initializer", "min_point_parallax_deg", &t.initializer.two_view.min_point_parallax_deg},
+      {"initializer", "min_median_parallax_deg", &t.initializer.two_view.min_median_parallax_deg},
+      {"initializer", "min_points", &t.initializer.two_view.min_points},
+      {"initializer", "min_good_fraction", &t.initializer.two_view.min_good_fraction},
+      {"initializer", "ambiguity_ratio", &t.initializer.two_view.ambiguity_ratio},
+      {"initializer", "bundle_adjustment_iterations",
+       &t.initializer.two_view.bundle_adjustment_iterations},
+      {"flow", "window", &t.motion_prior.flow.window},
+      {"flow", "pyramid_levels", &t.motion_prior.flow.pyramid_levels},
+      {"flow", "max_iterations", &t.motion_prior.flow.max_iterations},
+      {"flow", "max_error", &t.motion_prior.flow.max_error},
+      {"flow", "max_forward_backward_px", &t.motion_prior.flow.max_forward_backward_px},
+      {"flow", "dis_preset", &t.motion_prior.flow.dis_preset},
+      {"motion_prior", "flow_sigma_px", &t.motion_prior.flow_sigma_px},
+      {"motion_prior", "min_tracks", &t.motion_prior.min_tracks},
+      {"motion_prior", "max_tracks", &t.motion_prior.max_tracks},
+      {"motion_prior", "min_rotation_sigma", &t.motion_prior.min_rotation_sigma},
+      {"motion_prior", "min_translation_sigma", &t.motion_prior.min_translation_sigma},
+      {"motion_prior", "fallback_rotation_sigma", &t.motion_prior.fallback_rotation_sigma},
+      {"motion_prior", "fallback_translation_sigma", &t.motion_prior.fallback_translation_sigma},
+      {"search", "template_radius", &t.search.template_radius},
+      {"search", "min_ncc", &t.search.min_ncc},
+      {"search", "gate_chi2", &t.search.gate_chi2},
+      {"search", "pixel_sigma_px", &t.search.pixel_sigma_px},
+      {"search", "min_radius_px", &t.search.min_radius_px},
+      {"search", "max_radius_px", &t.search.max_radius_px},
+      {"search", "fast_threshold", &t.search.fast_threshold},
+      {"search", "max_scale_change", &t.search.max_scale_change},
+      {"search", "max_view_angle_deg", &t.search.max_view_angle_deg},
+      {"search", "max_points", &t.search.max_points},
+      {"motion_ba", "huber_width_px", &t.motion_ba.huber_width_px},
+      {"motion_ba", "inlier_threshold_px", &t.motion_ba.inlier_threshold_px},
+      {"motion_ba", "max_iterations", &t.motion_ba.max_iterations},
+      {"motion_ba", "min_step_norm", &t.motion_ba.min_step_norm},
+      {"motion_ba", "function_tolerance", &t.motion_ba.function_tolerance},
+      {"candidates", "max_candidates", &t.candidates.max_candidates},
+      {"candidates", "new_per_keyframe", &t.candidates.new_per_keyframe},
+      {"candidates", "max_rejections", &t.candidates.max_rejections},
+      {"candidates", "max_views", &t.candidates.max_views},
+      {"filter", "pixel_sigma_px", &t.candidates.filter.pixel_sigma_px},
+      {"filter", "min_parallax_deg", &t.candidates.filter.min_parallax_deg},
+      {"filter", "max_residual_sigmas", &t.candidates.filter.max_residual_sigmas},
+      {"filter", "max_iterations", &t.candidates.filter.max_iterations},
+      {"filter", "max_relative_depth_sigma", &t.candidates.filter.max_relative_depth_sigma},
+      {"filter", "min_updates", &t.candidates.filter.min_updates},
+      {"filter", "max_promotion_error_px", &t.candidates.filter.max_promotion_error_px},
+      {"keyframes", "distance_to_depth_ratio", &t.keyframes.distance_to_depth_ratio},
+      {"window_ba", "window_size", &p.mapper.window.window_size},
+      {"window_ba", "num_fixed_keyframes", &p.mapper.window.num_fixed_keyframes},
+      {"window_ba", "huber_width_px", &p.mapper.window.huber_width_px},
+      {"window_ba", "inlier_threshold_px", &p.mapper.window.inlier_threshold_px},
+      {"window_ba", "max_iterations", &p.mapper.window.max_iterations},
+      {"window_ba", "function_tolerance", &p.mapper.window.function_tolerance},
+      {"window_ba", "num_threads", &p.mapper.window.num_threads},
+      {"mapper", "run_window_ba", &p.mapper.run_window_ba},
+      {"system", "mapping_thread", &p.mapping_thread},
+  };
+  Field flow_method{"flow", "method", static_cast<int*>(nullptr)};
+  flow_method.parse_text = [&t](const std::string& s) {
+    t.motion_prior.flow.method = tracking::parseFlowMethod(s);
+  };
+  flow_method.print_text = [&t] { return tracking::flowMethodName(t.motion_prior.flow.method); };
+  f.insert(f.begin() + 24, flow_method);
+  Field solver{"motion_ba", "solver", static_cast<int*>(nullptr)};
+  solver.parse_text = [&t](const std::string& s) {
+    if (s == "hand_written") {
+      t.motion_ba.solver = mapping::MotionOnlySolver::kHandWritten;
+    } else if (s == "ceres") {
+      t.motion_ba.solver = mapping::MotionOnlySolver::kCeres;
+    } else {
+      throw std::invalid_argument("unknown solver '" + s + "' (accepted: hand_written, ceres)");
+    }
+  };
+  solver.print_text = [&t] {
+    return std::string(t.motion_ba.solver == mapping::MotionOnlySolver::kCeres ? "ceres"
+                                                                               : "hand_written");
+  };
+  const auto candidates_section = std::find_if(
+      f.begin(), f.end(), [](const Field& field) { return field.section == "candidates"; });
+  f.insert(candidates_section, solver);
+  return f;
+}
+
+[[noreturn]] void fail(const std::string& origin, const std::string& reason) {
+  throw std::runtime_error("parameters " + origin + ": " + reason);
+}
+
+void readField(const Field& field, const YAML::Node& node, const std::string& origin) {
+  const std::string name = field.section + "." + field.key;
+  try {
+    if (field.parse_text) {
+      field.parse_text(node.as<std::string>());
+    } else if (auto* i = std::get_if<int*>(&field.value)) {
+      **i = node.as<int>();
+    } else if (auto* d = std::get_if<double*>(&field.value)) {
+      **d = node.as<double>();
+    } else if (auto* b = std::get_if<bool*>(&field.value)) {
+      **b = node.as<bool>();
+    }
+  } catch (const YAML::Exception&) {
+    fail(origin, "'" + name + "' does not hold the expected kind of value");
+  } catch (const std::invalid_argument& e) {
+    fail(origin, "'" + name + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
+  SlamParams params;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    fail(origin, std::string("not valid YAML (") + e.what() + ")");
+  }
+  if (root.IsNull()) return params;
+  if (!root.IsMap()) fail(origin, "expected a mapping of sections (tracker, search, ...)");
+  const std::vector<Field> fields = fieldsOf(params);
+  std::map<std::string, std::set<std::string>> known;
+  for (const Field& field : fields)
+    known[field.section].insert(field.key);
+  for (const auto& section : root) {
+    const std::string name = section.first.as<std::string>();
+    if (!known.count(name)) fail(origin, "unknown section '" + name + "'");
+    if (!section.second.IsMap()) fail(origin, "section '" + name + "' must be a mapping");
+    for (const auto& entry : section.second) {
+      const std::string key = entry.first.as<std::string>();
+      if (!known[name].count(key)) fail(origin, "unknown key '" + name + "." += key + "'");
+    }
+  }
+  for (const Field& field : fields) {
+    const YAML::Node section = root[field.section];
+    if (section && section[field.key]) readField(field, section[field.key], origin);
+  }
+  try {
+    params.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(origin, e.what());
+  }
+  return params;
+}
+
+SlamParams loadSlamParams(const std::string& path) {
+  std::ifstream file(path);
+  if (!file) fail("'" + path + "'", "cannot open the file");
+  std::stringstream text;
+  text << file.rdbuf();
+  return parseSlamParams(text.str(), "'" + path + "'");
+}
+
+std::string formatSlamParams(const SlamParams& params_in) {
+  SlamParams params = params_in;
+  std::ostringstream out;
+  out.precision(10);
+  std::string section;
+  for (const Field& field : fieldsOf(params)) {
+    if (field.section != section) {
+      section = field.section;
+      out << section << ":\n";
+    }
+    out << "  " << field.key << ": ";
+    if (field.print_text) {
+      out << field.print_text();
+    } else if (auto* i = std::get_if<int*>(&field.value)) {
+      out << **i;
+    } else if (auto* d = std::get_if<double*>(&field.value)) {
+      out << **d;
+    } else if (auto* b = std::get_if<bool*>(&field.value)) {
+      out << (**b ? "true" : "false");
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace scale_drift_slam::io

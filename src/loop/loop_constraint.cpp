@@ -1,0 +1,138 @@
+#include "scale_drift_slam/loop/loop_constraint.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+namespace scale_drift_slam::loop {
+
+void LoopConstraintParams::validate() const {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("loop constraint: " + what);
+  };
+  if (!(ransac_threshold_px > 0.0)) fail("ransac_threshold_px must be > 0");
+  if (ransac_iterations < 1) fail("ransac_iterations must be >= 1");
+  if (!(ransac_confidence > 0.0 && ransac_confidence < 1.0)) {
+    fail("ransac_confidence must be in (0, 1)");
+  }
+  if (min_inliers < 4) fail("min_inliers must be >= 4");
+  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
+    fail("min_inlier_ratio must be in [0, 1]");
+  }
+  if (min_scale_pairs < 1) fail("min_scale_pairs must be >= 1");
+  refinement.validate();
+}
+
+namespace {
+
+void validateInput(const LoopConstraintInput& input) {
+  if (!(input.focal_length_px > 0.0) || !std::isfinite(input.focal_length_px)) {
+    throw std::invalid_argument("loop constraint: focal length must be > 0");
+  }
+  for (const Match2D3D& m : input.matches) {
+    if (!m.xy_current.allFinite() || !m.p_loop.allFinite()) {
+      throw std::invalid_argument("loop constraint: a 2D-3D match is not finite");
+    }
+  }
+  for (const Match3D3D& m : input.point_pairs) {
+    if (!m.p_current.allFinite() || !m.p_loop.allFinite()) {
+      throw std::invalid_argument("loop constraint: a 3D-3D pair is not finite");
+    }
+  }
+}
+
+/// P3P (AP3P) + RANSAC on normalised coordinates (camera matrix = identity, threshold in
+/// normalised units). Returns false when RANSAC finds no model.
+bool ransacPose(const LoopConstraintInput& input, const LoopConstraintParams& params,
+                geometry::SE3* T_current_loop) {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  for (const Match2D3D& m : input.matches) {
+    object.emplace_back(m.p_loop.x(), m.p_loop.y(), m.p_loop.z());
+    image.emplace_back(m.xy_current.x(), m.xy_current.y());
+  }
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  const bool found = cv::solvePnPRansac(object, image, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec,
+                                        tvec, false, params.ransac_iterations,
+                                        params.ransac_threshold_px / input.focal_length_px,
+                                        params.ransac_confidence, inliers, cv::SOLVEPNP_AP3P);
+  if (!found || inliers.size() < 4) return false;
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  cv::cv2eigen(R_cv, R);
+  cv::cv2eigen(tvec, t);
+  *T_current_loop = geometry::SE3(R, t);
+  return true;
+}
+
+}  // namespace
+
+LoopConstraintResult estimateLoopConstraint(const LoopConstraintInput& input,
+                                            const LoopConstraintParams& params) {
+  params.validate();
+  validateInput(input);
+  LoopConstraintResult result;
+  LoopConstraint& c = result.constraint;
+  c.current_id = input.current_id;
+  c.loop_id = input.loop_id;
+  c.num_matches = static_cast<int>(input.matches.size());
+  if (c.num_matches < params.min_inliers) {
+    result.reason = "only " + std::to_string(c.num_matches) + " 2D-3D matches";
+    return result;
+  }
+  geometry::SE3 T_ransac;
+  if (!ransacPose(input, params, &T_ransac)) {
+    result.reason = "P3P RANSAC found no pose";
+    return result;
+  }
+
+  // Robust refinement on all matches, the loop keyframe's frame playing the world.
+  mapping::MotionOnlyInput refine;
+  refine.T_cam_world_guess = T_ransac;
+  refine.focal_length_px = input.focal_length_px;
+  for (const Match2D3D& m : input.matches)
+    refine.observations.push_back({m.p_loop, m.xy_current});
+  mapping::MotionOnlyBundleAdjustmentParams refine_params = params.refinement;
+  refine_params.inlier_threshold_px = params.ransac_threshold_px;
+  const mapping::MotionOnlyResult refined =
+      mapping::solveMotionOnlyBundleAdjustment(refine, refine_params);
+  c.T_current_loop = refined.T_cam_world;
+  c.num_inliers = static_cast<int>(refined.statistics.num_inliers);
+  c.rmse_px = refined.statistics.final_rmse_px;
+  if (c.num_inliers < params.min_inliers ||
+      c.num_inliers < params.min_inlier_ratio * c.num_matches) {
+    result.reason = "only " + std::to_string(c.num_inliers) + " of " +
+                    std::to_string(c.num_matches) + " 2D-3D matches are inliers";
+    return result;
+  }
+
+  // Scale: median of |p^c| / |T_cl p^l| over the pairs in front of the current camera.
+  std::vector<double> ratios;
+  for (const Match3D3D& m : input.point_pairs) {
+    const Eigen::Vector3d in_current = c.T_current_loop * m.p_loop;
+    const double d_loop = in_current.norm(), d_current = m.p_current.norm();
+    if (in_current.z() > 0.0 && m.p_current.z() > 0.0 && d_loop > 0.0 && d_current > 0.0) {
+      ratios.push_back(d_current / d_loop);
+    }
+  }
+  c.num_scale_pairs = static_cast<int>(ratios.size());
+  if (c.num_scale_pairs < params.min_scale_pairs) {
+    result.reason = "only " + std::to_string(c.num_scale_pairs) + " usable 3D-3D pairs";
+    return result;
+  }
+  auto middle = ratios.begin() + ratios.size() / 2;
+  std::nth_element(ratios.begin(), middle, ratios.end());
+  c.scale = *middle;
+  c.S_current_loop = geometry::Sim3::fromScale(c.T_current_loop.rotation(),
+                                               c.scale * c.T_current_loop.translation(), c.scale);
+  result.success = true;
+  return result;
+}
+
+}  // namespace scale_drift_slam::loop

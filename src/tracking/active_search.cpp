@@ -1,0 +1,294 @@
+#include "scale_drift_slam/tracking/active_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/LU>
+
+namespace scale_drift_slam::tracking {
+
+void ActiveSearchParams::validate() const {
+  if (template_radius < 2 || template_radius > PointAppearance::kPatchRadius / 2) {
+    throw std::invalid_argument("search.template_radius must be in [2, 5]");
+  }
+  if (!(min_ncc > -1.0 && min_ncc < 1.0))
+    throw std::invalid_argument("search.min_ncc must be in (-1, 1)");
+  if (!(gate_chi2 > 0.0)) throw std::invalid_argument("search.gate_chi2 must be > 0");
+  if (!(pixel_sigma_px > 0.0)) throw std::invalid_argument("search.pixel_sigma_px must be > 0");
+  if (!(min_radius_px > 0.0 && max_radius_px >= min_radius_px)) {
+    throw std::invalid_argument("search: need 0 < min_radius_px <= max_radius_px");
+  }
+  if (fast_threshold < 1) throw std::invalid_argument("search.fast_threshold must be >= 1");
+  if (!(max_scale_change > 1.0)) throw std::invalid_argument("search.max_scale_change must be > 1");
+  if (max_points < 1) throw std::invalid_argument("search.max_points must be >= 1");
+  if (!(max_view_angle_deg > 0.0 && max_view_angle_deg <= 90.0)) {
+    throw std::invalid_argument("search.max_view_angle_deg must be in (0, 90]");
+  }
+}
+
+bool PointAppearance::cut(const ImagePyramid& image, const Eigen::Vector2d& px) {
+  const int r = kPatchRadius;
+  for (int level = 0; level < 2; ++level) {
+    if (level >= image.numLevels()) return false;
+    const cv::Mat& source = image.levels[level];
+    const double s = level == 0 ? 1.0 : 0.5;
+    const int x0 = static_cast<int>(std::lround(px.x() * s)) - r;
+    const int y0 = static_cast<int>(std::lround(px.y() * s)) - r;
+    if (x0 < 0 || y0 < 0 || x0 + 2 * r + 1 > source.cols || y0 + 2 * r + 1 > source.rows) {
+      patch[0].release();
+      return false;
+    }
+    patch[level] = source(cv::Rect(x0, y0, 2 * r + 1, 2 * r + 1)).clone();
+  }
+  px_reference = px;
+  return true;
+}
+
+Eigen::Matrix2d referenceWarp(const geometry::CameraModel& camera, const Eigen::Vector3d& p_ref,
+                              const Eigen::Vector3d& p_cur, const geometry::SE3& T_cur_ref) {
+  const Eigen::Matrix<double, 2, 3> J_ref = camera.projectionJacobian(p_ref);
+  const Eigen::Matrix<double, 2, 3> J_cur = camera.projectionJacobian(p_cur);
+  // A pixel step in the reference at constant depth moves the point by J_ref2^-1 step (x, y).
+  const Eigen::Matrix2d A_cur_ref =
+      J_cur * T_cur_ref.rotationMatrix().leftCols<2>() * J_ref.leftCols<2>().inverse();
+  return A_cur_ref.inverse();
+}
+
+double normalizedCrossCorrelation(const float* a, const float* b, int n) {
+  double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  for (int i = 0; i < n; ++i) {
+    sa += a[i];
+    sb += b[i];
+    saa += a[i] * a[i];
+    sbb += b[i] * b[i];
+    sab += a[i] * b[i];
+  }
+  const double va = saa - sa * sa / n, vb = sbb - sb * sb / n;
+  if (va < 1e-6 * n || vb < 1e-6 * n) return -1.0;
+  return (sab - sa * sb / n) / std::sqrt(va * vb);
+}
+
+namespace {
+
+/// Samples the reference template seen from the current view: T(x) = I_ref(c + A x).
+bool warpTemplate(const PointAppearance& appearance, const Eigen::Matrix2d& A_ref_cur, int r,
+                  std::vector<float>* out) {
+  const int level = std::abs(A_ref_cur.determinant()) > 3.0 ? 1 : 0;
+  const double s = level == 0 ? 1.0 : 0.5;
+  const cv::Mat& patch = appearance.patch[level];
+  const int R = PointAppearance::kPatchRadius;
+  const Eigen::Vector2d origin(std::lround(appearance.px_reference.x() * s) - R,
+                               std::lround(appearance.px_reference.y() * s) - R);
+  const Eigen::Vector2d center = appearance.px_reference * s - origin;
+  const Eigen::Matrix2d A = A_ref_cur * s;
+  out->resize(static_cast<std::size_t>(2 * r + 1) * static_cast<std::size_t>(2 * r + 1));
+  int k = 0;
+  for (int dy = -r; dy <= r; ++dy) {
+    for (int dx = -r; dx <= r; ++dx) {
+      const Eigen::Vector2d p = center + A * Eigen::Vector2d(dx, dy);
+      const int x = static_cast<int>(std::floor(p.x())), y = static_cast<int>(std::floor(p.y()));
+      if (x < 0 || y < 0 || x + 1 >= patch.cols || y + 1 >= patch.rows) return false;
+      const double fx = p.x() - x, fy = p.y() - y;
+      const unsigned char* row0 = patch.ptr<unsigned char>(y) + x;
+      const unsigned char* row1 = patch.ptr<unsigned char>(y + 1) + x;
+      (*out)[k++] = static_cast<float>((1 - fy) * ((1 - fx) * row0[0] + fx * row0[1]) +
+                                       fy * ((1 - fx) * row1[0] + fx * row1[1]));
+    }
+  }
+  return true;
+}
+
+/// Makes the template zero-mean with unit norm; false when it has no texture.
+bool normalizeTemplate(std::vector<float>* templ) {
+  double sum = 0.0;
+  for (const float v : *templ)
+    sum += v;
+  const float mean = static_cast<float>(sum / templ->size());
+  double norm_sq = 0.0;
+  for (float& v : *templ) {
+    v -= mean;
+    norm_sq += v * v;
+  }
+  if (norm_sq < 1e-6 * templ->size()) return false;
+  const float scale = static_cast<float>(1.0 / std::sqrt(norm_sq));
+  for (float& v : *templ)
+    v *= scale;
+  return true;
+}
+
+/// NCC of a normalised template (zero mean, unit norm) with the image patch centred at integer
+/// pixel (x, y), in one pass: sum t b / sqrt(sum b^2 - (sum b)^2 / n). -2 off the image.
+double scoreAt(const cv::Mat& image, int x, int y, int r, const std::vector<float>& templ) {
+  if (x < r || y < r || x + r >= image.cols || y + r >= image.rows) return -2.0;
+  float sb = 0.f, sbb = 0.f, stb = 0.f;
+  const float* t = templ.data();
+  for (int dy = -r; dy <= r; ++dy) {
+    const unsigned char* row = image.ptr<unsigned char>(y + dy) + x - r;
+    for (int dx = 0; dx <= 2 * r; ++dx, ++t) {
+      const float b = row[dx];
+      sb += b;
+      sbb += b * b;
+      stb += *t * b;
+    }
+  }
+  const float variance = sbb - sb * sb / static_cast<float>(templ.size());
+  if (variance < 1e-3f * templ.size()) return -1.0;
+  return stb / std::sqrt(variance);
+}
+
+/// The vertex of the parabola through (-1, a), (0, b), (1, c), within [-0.5, 0.5].
+double parabolaPeak(double a, double b, double c) {
+  const double denominator = a - 2.0 * b + c;
+  if (!(denominator < -1e-9)) return 0.0;
+  return std::clamp(0.5 * (a - c) / denominator, -0.5, 0.5);
+}
+
+}  // namespace
+
+CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params) {
+  return CornerGrid(detectFast(grey, params.fast_threshold, params.template_radius + 1), grey.cols,
+                    grey.rows);
+}
+
+namespace {
+
+struct Prediction {
+  std::size_t index;
+  Eigen::Vector3d p_cur, p_ref;
+};
+
+/// Projects a point and checks that it is in the image and in its viewable range (view angle
+/// and scale change against its reference keyframe).
+bool predict(const SearchPoint& point, const geometry::SE3& T_cur_world,
+             const geometry::CameraModel& camera, const ActiveSearchParams& params,
+             Prediction* prediction, SearchMatch* match) {
+  if (point.appearance == nullptr || point.appearance->empty()) return false;
+  prediction->p_cur = T_cur_world * point.p_world;
+  prediction->p_ref = point.T_ref_world * point.p_world;
+  if (prediction->p_cur.z() <= 0.0 || prediction->p_ref.z() <= 0.0) return false;
+  const auto predicted = camera.project(prediction->p_cur);
+  if (!predicted || !camera.isInImage(*predicted, params.template_radius + 1)) return false;
+  const Eigen::Vector3d ray_cur = point.p_world - T_cur_world.inverseTranslation();
+  const Eigen::Vector3d ray_ref = point.p_world - point.T_ref_world.inverseTranslation();
+  const double scale = ray_cur.norm() / ray_ref.norm();
+  if (ray_cur.normalized().dot(ray_ref.normalized()) <
+      std::cos(params.max_view_angle_deg * M_PI / 180.0)) {
+    return false;
+  }
+  if (scale > params.max_scale_change || scale * params.max_scale_change < 1.0) return false;
+  match->visible = true;
+  match->predicted_px = *predicted;
+  return true;
+}
+
+/// At most `max_points` of the predictions, spread over the image: a round robin over the cells
+/// of an 8 x 6 grid.
+std::vector<Prediction> spread(std::vector<Prediction> predictions,
+                               const std::vector<SearchMatch>& matches, int width, int height,
+                               int max_points) {
+  if (static_cast<int>(predictions.size()) <= max_points) return predictions;
+  constexpr int kCols = 8, kRows = 6;
+  std::vector<std::vector<Prediction>> cells(static_cast<std::size_t>(kCols) * kRows);
+  for (const Prediction& p : predictions) {
+    const Eigen::Vector2d& px = matches[p.index].predicted_px;
+    const int cx = std::clamp(static_cast<int>(px.x() * kCols / width), 0, kCols - 1);
+    const int cy = std::clamp(static_cast<int>(px.y() * kRows / height), 0, kRows - 1);
+    cells[cy * kCols + cx].push_back(p);
+  }
+  std::vector<Prediction> chosen;
+  for (std::size_t round = 0; static_cast<int>(chosen.size()) < max_points; ++round) {
+    bool any = false;
+    for (auto& cell : cells) {
+      if (round >= cell.size() || static_cast<int>(chosen.size()) >= max_points) continue;
+      chosen.push_back(cell[round]);
+      any = true;
+    }
+    if (!any) break;
+  }
+  return chosen;
+}
+
+/// NCC matching of one predicted point: the best of the prediction itself and the FAST corners
+/// inside its gated region, then the sub-pixel parabola.
+void matchPoint(const SearchPoint& point, const Prediction& prediction,
+                const geometry::SE3& T_cur_world, const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
+                const geometry::CameraModel& camera, const cv::Mat& image,
+                const CornerGrid& corners, const ActiveSearchParams& params,
+                std::vector<float>* templ, std::vector<int>* candidates, SearchMatch* match) {
+  const int r = params.template_radius;
+  match->searched = true;
+  const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
+  if (!warpTemplate(*point.appearance,
+                    referenceWarp(camera, prediction.p_ref, prediction.p_cur, T_cur_ref), r,
+                    templ) ||
+      !normalizeTemplate(templ)) {
+    return;
+  }
+  // Innovation covariance of the prediction: J Sigma_Delta J^T + sigma^2 I (+ the floor that
+  // keeps the region at least min_radius_px).
+  Eigen::Matrix<double, 2, 6> J;
+  J << camera.projectionJacobian(prediction.p_cur) *
+           geometry::SE3::actionJacobian(prediction.p_cur);
+  const double floor = params.pixel_sigma_px * params.pixel_sigma_px +
+                       params.min_radius_px * params.min_radius_px / params.gate_chi2;
+  const Eigen::Matrix2d Sigma_z =
+      J * Sigma_Delta * J.transpose() + Eigen::Matrix2d::Identity() * floor;
+  const Eigen::Matrix2d information = Sigma_z.inverse();
+  const double rx = std::min(std::sqrt(params.gate_chi2 * Sigma_z(0, 0)), params.max_radius_px);
+  const double ry = std::min(std::sqrt(params.gate_chi2 * Sigma_z(1, 1)), params.max_radius_px);
+  const Eigen::Vector2d& predicted = match->predicted_px;
+  corners.query(predicted, rx, ry, candidates);
+  int best_x = static_cast<int>(std::lround(predicted.x()));
+  int best_y = static_cast<int>(std::lround(predicted.y()));
+  double best = scoreAt(image, best_x, best_y, r, *templ);
+  for (int c : *candidates) {
+    const cv::Point2f& pt = corners.corners()[c].pt;
+    const Eigen::Vector2d d = Eigen::Vector2d(pt.x, pt.y) - predicted;
+    if (d.dot(information * d) > params.gate_chi2) continue;
+    const int x = static_cast<int>(pt.x), y = static_cast<int>(pt.y);
+    const double score = scoreAt(image, x, y, r, *templ);
+    if (score > best) {
+      best = score;
+      best_x = x;
+      best_y = y;
+    }
+  }
+  match->ncc = best;
+  if (best < params.min_ncc) return;
+  const double dx = parabolaPeak(scoreAt(image, best_x - 1, best_y, r, *templ), best,
+                                 scoreAt(image, best_x + 1, best_y, r, *templ));
+  const double dy = parabolaPeak(scoreAt(image, best_x, best_y - 1, r, *templ), best,
+                                 scoreAt(image, best_x, best_y + 1, r, *templ));
+  match->found = true;
+  match->px = Eigen::Vector2d(best_x + dx, best_y + dy);
+  match->xy = camera.undistortToNormalized(match->px);
+}
+
+}  // namespace
+
+std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
+                                      const geometry::SE3& T_cur_world,
+                                      const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
+                                      const geometry::CameraModel& camera,
+                                      const ImagePyramid& image, const CornerGrid& corners,
+                                      const ActiveSearchParams& params) {
+  std::vector<SearchMatch> matches(points.size());
+  std::vector<Prediction> predictions;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Prediction prediction{i, {}, {}};
+    if (predict(points[i], T_cur_world, camera, params, &prediction, &matches[i])) {
+      predictions.push_back(prediction);
+    }
+  }
+  std::vector<float> templ;
+  std::vector<int> candidates;
+  for (const Prediction& prediction : spread(std::move(predictions), matches, camera.width(),
+                                             camera.height(), params.max_points)) {
+    matchPoint(points[prediction.index], prediction, T_cur_world, Sigma_Delta, camera, image.base(),
+               corners, params, &templ, &candidates, &matches[prediction.index]);
+  }
+  return matches;
+}
+
+}  // namespace scale_drift_slam::tracking

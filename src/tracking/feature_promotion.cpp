@@ -1,0 +1,96 @@
+// The promotion rule of inverse-depth features (paper/ALGORITHM.md, "Front-end: keyframe
+// dropping"): a point-only bundle adjustment against a few surrounding keyframes, then a check of
+// the reprojection error in each.
+
+#include <cmath>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+#include "../mapping/reprojection_cost.h"
+#include "scale_drift_slam/tracking/inverse_depth_filter.h"
+
+namespace scale_drift_slam::tracking {
+namespace {
+
+/// sum |f (z_k - proj(T_k x))|^2 and its Gauss-Newton system in the point x; infinity when x is
+/// behind one of the cameras.
+double pointCost(const std::vector<PromotionView>& views, const Eigen::Vector3d& x, double focal,
+                 Eigen::Matrix3d* H, Eigen::Vector3d* g, std::vector<double>* errors) {
+  double cost = 0.0;
+  if (H != nullptr) H->setZero(), g->setZero();
+  if (errors != nullptr) errors->clear();
+  for (const PromotionView& view : views) {
+    Eigen::Vector2d r;
+    Eigen::Matrix<double, 2, 3> J;
+    if (!mapping::internal::reprojectionResidual(view.T_kf_world, x, view.xy, focal, &r, nullptr,
+                                                 H != nullptr ? &J : nullptr)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    cost += r.squaredNorm();
+    if (errors != nullptr) errors->push_back(r.norm());
+    if (H == nullptr) continue;
+    *H += J.transpose() * J;
+    *g += J.transpose() * r;
+  }
+  return cost;
+}
+
+}  // namespace
+
+PromotionResult promoteFeature(const InverseDepthFilter& filter,
+                               const std::vector<PromotionView>& views, double focal_length_px) {
+  PromotionResult result;
+  if (!(focal_length_px > 0.0)) throw std::invalid_argument("promotion: focal length must be > 0");
+  if (views.size() < 2) {
+    result.reason = "fewer than 2 keyframes see the feature";
+    return result;
+  }
+  if (!(filter.state().z() > 0.0)) {
+    result.reason = "the feature is at infinity";
+    return result;
+  }
+  // Levenberg-Marquardt on the 3 coordinates, from the filter's estimate.
+  Eigen::Vector3d x = filter.pointInWorld();
+  Eigen::Matrix3d H;
+  Eigen::Vector3d g;
+  double cost = pointCost(views, x, focal_length_px, &H, &g, nullptr);
+  if (!std::isfinite(cost)) {
+    result.reason = "the feature is behind a keyframe";
+    return result;
+  }
+  double mu = 1e-4;
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    bool accepted = false;
+    for (int attempt = 0; attempt < 8 && !accepted; ++attempt) {
+      Eigen::Matrix3d A = H;
+      A.diagonal() *= 1.0 + mu;
+      const Eigen::Vector3d x_new = x - A.ldlt().solve(g);
+      const double cost_new = pointCost(views, x_new, focal_length_px, nullptr, nullptr, nullptr);
+      if (cost_new < cost) {
+        accepted = true;
+        const bool converged = cost - cost_new < 1e-10 * cost + 1e-14;
+        x = x_new;
+        cost = pointCost(views, x, focal_length_px, &H, &g, nullptr);
+        mu = std::max(mu * 0.1, 1e-10);
+        if (converged) iteration = 10;
+      } else {
+        mu *= 10.0;
+      }
+    }
+    if (!accepted) break;
+  }
+  pointCost(views, x, focal_length_px, nullptr, nullptr, &result.errors_px);
+  result.p_world = x;
+  for (std::size_t k = 0; k < result.errors_px.size(); ++k) {
+    if (result.errors_px[k] > filter.params().max_promotion_error_px) {
+      result.reason = "reprojection error " + std::to_string(result.errors_px[k]) +
+                      " px in keyframe " + std::to_string(views[k].keyframe_id);
+      return result;
+    }
+  }
+  result.accepted = true;
+  return result;
+}
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,141 @@
+#include "scale_drift_slam/tracking/image_preparation.h"
+
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+namespace scale_drift_slam::tracking {
+
+PixelEncoding parsePixelEncoding(const std::string& name) {
+  if (name == "mono8" || name == "8UC1") return PixelEncoding::kMono8;
+  if (name == "mono16" || name == "16UC1") return PixelEncoding::kMono16;
+  if (name == "bgr8" || name == "8UC3") return PixelEncoding::kBgr8;
+  if (name == "rgb8") return PixelEncoding::kRgb8;
+  if (name == "bgra8" || name == "8UC4") return PixelEncoding::kBgra8;
+  if (name == "rgba8") return PixelEncoding::kRgba8;
+  throw std::invalid_argument("unsupported image encoding '" + name +
+                              "' (accepted: mono8, mono16, bgr8, rgb8, bgra8, rgba8)");
+}
+
+std::string pixelEncodingName(PixelEncoding encoding) {
+  switch (encoding) {
+    case PixelEncoding::kMono8:
+      return "mono8";
+    case PixelEncoding::kMono16:
+      return "mono16";
+    case PixelEncoding::kBgr8:
+      return "bgr8";
+    case PixelEncoding::kRgb8:
+      return "rgb8";
+    case PixelEncoding::kBgra8:
+      return "bgra8";
+    case PixelEncoding::kRgba8:
+      return "rgba8";
+  }
+  return "unknown";
+}
+
+PixelEncoding encodingOfMat(const cv::Mat& image) {
+  switch (image.type()) {
+    case CV_8UC1:
+      return PixelEncoding::kMono8;
+    case CV_16UC1:
+      return PixelEncoding::kMono16;
+    case CV_8UC3:
+      return PixelEncoding::kBgr8;
+    case CV_8UC4:
+      return PixelEncoding::kBgra8;
+    default:
+      throw std::invalid_argument("unsupported OpenCV image type " + std::to_string(image.type()) +
+                                  " (8-bit grey/BGR/BGRA or 16-bit grey expected)");
+  }
+}
+
+namespace {
+
+int expectedType(PixelEncoding encoding) {
+  switch (encoding) {
+    case PixelEncoding::kMono8:
+      return CV_8UC1;
+    case PixelEncoding::kMono16:
+      return CV_16UC1;
+    case PixelEncoding::kBgr8:
+    case PixelEncoding::kRgb8:
+      return CV_8UC3;
+    case PixelEncoding::kBgra8:
+    case PixelEncoding::kRgba8:
+      return CV_8UC4;
+  }
+  return -1;
+}
+
+}  // namespace
+
+cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding) {
+  if (image.empty()) throw std::invalid_argument("empty image");
+  if (image.type() != expectedType(encoding)) {
+    throw std::invalid_argument("image announced as " + pixelEncodingName(encoding) + " has " +
+                                std::to_string(image.channels()) + " channel(s) of " +
+                                std::to_string(image.elemSize1() * 8) + " bits");
+  }
+  cv::Mat grey;
+  switch (encoding) {
+    case PixelEncoding::kMono8:
+      grey = image.clone();
+      break;
+    case PixelEncoding::kMono16:
+      image.convertTo(grey, CV_8U, 1.0 / 256.0);
+      break;
+    case PixelEncoding::kBgr8:
+      cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+      break;
+    case PixelEncoding::kRgb8:
+      cv::cvtColor(image, grey, cv::COLOR_RGB2GRAY);
+      break;
+    case PixelEncoding::kBgra8:
+      cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+      break;
+    case PixelEncoding::kRgba8:
+      cv::cvtColor(image, grey, cv::COLOR_RGBA2GRAY);
+      break;
+  }
+  return grey;
+}
+
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
+  if (grey.empty() || grey.type() != CV_8UC1) {
+    throw std::invalid_argument("image pyramid needs a non-empty 8-bit grey image");
+  }
+  if (num_levels < 1) throw std::invalid_argument("image pyramid needs at least one level");
+  if (padding < 1) throw std::invalid_argument("image pyramid needs a padding of at least 1");
+  int max_level = 0;
+  for (int w = grey.cols, h = grey.rows; max_level + 1 < num_levels && w >= 32 && h >= 32;
+       w /= 2, h /= 2) {
+    ++max_level;
+  }
+  ImagePyramid pyramid;
+  // cv::buildOpticalFlowPyramid halves with cv::pyrDown and pads every level by `padding`
+  // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
+  cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
+                              cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  return pyramid;
+}
+
+std::string frameProblem(const cv::Mat& grey, int expected_width, int expected_height,
+                         double min_contrast) {
+  if (grey.empty()) return "empty image";
+  if (grey.cols != expected_width || grey.rows != expected_height) {
+    return "image is " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
+           " but the calibration is " + std::to_string(expected_width) + "x" +
+           std::to_string(expected_height);
+  }
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(grey, mean, stddev);
+  if (stddev[0] < min_contrast) {
+    return "image has no texture (grey-level standard deviation " + std::to_string(stddev[0]) + ")";
+  }
+  return "";
+}
+
+}  // namespace scale_drift_slam::tracking

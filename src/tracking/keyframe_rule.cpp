@@ -1,0 +1,54 @@
+#include "scale_drift_slam/tracking/keyframe_rule.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace scale_drift_slam::tracking {
+
+void KeyframeRuleParams::validate() const {
+  if (!(distance_to_depth_ratio > 0.0) || !std::isfinite(distance_to_depth_ratio)) {
+    throw std::invalid_argument("keyframe rule: distance_to_depth_ratio must be > 0");
+  }
+}
+
+double medianSceneDepth(const geometry::SE3& T_cam_world,
+                        const std::vector<Eigen::Vector3d>& points_world) {
+  std::vector<double> depths;
+  depths.reserve(points_world.size());
+  for (const Eigen::Vector3d& p : points_world) {
+    const double z = (T_cam_world * p).z();
+    if (z > 0.0 && std::isfinite(z)) depths.push_back(z);
+  }
+  if (depths.empty()) {
+    throw std::invalid_argument("scene depth: no point lies in front of the camera");
+  }
+  auto middle = depths.begin() + depths.size() / 2;
+  std::nth_element(depths.begin(), middle, depths.end());
+  return *middle;
+}
+
+KeyframeDecision decideKeyframe(
+    const Eigen::Vector3d& camera_centre_world,
+    const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
+    double scene_depth, const KeyframeRuleParams& params) {
+  params.validate();
+  if (!(scene_depth > 0.0) || !std::isfinite(scene_depth)) {
+    throw std::invalid_argument("keyframe rule: the scene depth must be positive and finite");
+  }
+  KeyframeDecision decision;
+  decision.threshold = params.distance_to_depth_ratio * scene_depth;
+  decision.distance = std::numeric_limits<double>::infinity();
+  for (const auto& [id, centre] : keyframe_centres) {
+    const double d = (centre - camera_centre_world).norm();
+    if (d < decision.distance) {
+      decision.distance = d;
+      decision.closest = id;
+    }
+  }
+  decision.drop = decision.distance > decision.threshold;
+  return decision;
+}
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,130 @@
+#include "scale_drift_slam/tracking/map_initializer.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace scale_drift_slam::tracking {
+
+void InitializerParams::validate() const {
+  two_view.validate();
+  if (num_features < two_view.min_points) {
+    throw std::invalid_argument("initializer.num_features must be >= initializer.min_points");
+  }
+  if (min_tracks < two_view.min_points) {
+    throw std::invalid_argument("initializer.min_tracks must be >= initializer.min_points");
+  }
+  if (!(min_disparity_px >= 0.0))
+    throw std::invalid_argument("initializer.min_disparity_px must be >= 0");
+  if (max_frames < 2) throw std::invalid_argument("initializer.max_frames must be >= 2");
+}
+
+namespace {
+
+OpticalFlowParams initializerFlow(OpticalFlowParams params) {
+  params.method = FlowMethod::kLucasKanade;
+  params.max_forward_backward_px = 1.0;  // initial tracks must be clean: check both ways
+  return params;
+}
+
+}  // namespace
+
+MapInitializer::MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
+                               const InitializerParams& params,
+                               const FeatureDetectionParams& features,
+                               const OpticalFlowParams& flow)
+    : camera_(std::move(camera)),
+      params_(params),
+      features_(features),
+      flow_(initializerFlow(flow)) {
+  if (!camera_) throw std::invalid_argument("map initializer needs a camera model");
+  params_.validate();
+  features_.validate();
+}
+
+void MapInitializer::reset() {
+  has_reference_ = false;
+  reference_px_.clear();
+  current_px_.clear();
+}
+
+void MapInitializer::startReference(double timestamp, const ImagePyramid& image) {
+  const std::vector<cv::KeyPoint> corners =
+      detectSpreadCorners(image.base(), params_.num_features, features_);
+  reference_px_.clear();
+  for (const cv::KeyPoint& k : corners)
+    reference_px_.push_back(k.pt);
+  current_px_ = reference_px_;
+  frames_since_reference_ = 0;
+  reference_timestamp_ = timestamp;
+  reference_image_ = image;
+  previous_image_ = image;
+  has_reference_ = static_cast<int>(reference_px_.size()) >= params_.min_tracks;
+  status_ =
+      has_reference_
+          ? "new reference frame with " + std::to_string(reference_px_.size()) + " corners"
+          : "too few corners (" + std::to_string(reference_px_.size()) + ") for a reference frame";
+}
+
+std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const ImagePyramid& image) {
+  if (!has_reference_) {
+    startReference(timestamp, image);
+    return std::nullopt;
+  }
+  std::vector<cv::Point2f> next;
+  std::vector<unsigned char> ok;
+  flow_.track(previous_image_, image, current_px_, &next, &ok);
+  std::size_t kept = 0;
+  std::vector<double> disparity;
+  for (std::size_t i = 0; i < next.size(); ++i) {
+    if (!ok[i]) continue;
+    reference_px_[kept] = reference_px_[i];
+    current_px_[kept] = next[i];
+    const cv::Point2f d = next[i] - reference_px_[kept];
+    disparity.push_back(std::sqrt(d.dot(d)));
+    ++kept;
+  }
+  reference_px_.resize(kept);
+  current_px_.resize(kept);
+  previous_image_ = image;
+  ++frames_since_reference_;
+  if (static_cast<int>(kept) < params_.min_tracks || frames_since_reference_ > params_.max_frames) {
+    status_ = "restarting: " + std::to_string(kept) + " tracks after " +
+              std::to_string(frames_since_reference_) + " frames";
+    startReference(timestamp, image);
+    return std::nullopt;
+  }
+  std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
+  const double median_disparity = disparity[disparity.size() / 2];
+  if (median_disparity < params_.min_disparity_px) {
+    status_ = "waiting for motion (median disparity " + std::to_string(median_disparity) + " px)";
+    return std::nullopt;
+  }
+  InitialMap map;
+  for (std::size_t i = 0; i < kept; ++i) {
+    map.px_first.emplace_back(reference_px_[i].x, reference_px_[i].y);
+    map.px_second.emplace_back(current_px_[i].x, current_px_[i].y);
+    map.xy_first.push_back(camera_->undistortToNormalized(map.px_first.back()));
+    map.xy_second.push_back(camera_->undistortToNormalized(map.px_second.back()));
+  }
+  const double focal = 0.5 * (camera_->calibration().fx + camera_->calibration().fy);
+  TwoViewResult result = reconstructTwoView(map.xy_first, map.xy_second, focal, params_.two_view);
+  if (!result.success) {
+    status_ = "two-view reconstruction refused: " + result.reason;
+    return std::nullopt;
+  }
+  map.first_timestamp = reference_timestamp_;
+  map.second_timestamp = timestamp;
+  map.T_second_first = result.T_second_first;
+  map.p_first = std::move(result.points_first);
+  map.triangulated = std::move(result.triangulated);
+  map.first_image = reference_image_;
+  map.second_image = image;
+  map.used_homography = result.used_homography;
+  map.median_parallax_deg = result.median_parallax_deg;
+  status_ = "initialised from " + std::to_string(result.num_triangulated) + " points (" +
+            (result.used_homography ? "homography" : "essential matrix") + ")";
+  reset();
+  return map;
+}
+
+}  // namespace scale_drift_slam::tracking

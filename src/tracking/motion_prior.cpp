@@ -1,0 +1,107 @@
+#include "scale_drift_slam/tracking/motion_prior.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include <Eigen/Cholesky>
+
+namespace scale_drift_slam::tracking {
+
+void MotionPriorParams::validate() const {
+  flow.validate();
+  if (!(flow_sigma_px > 0.0)) throw std::invalid_argument("motion_prior.flow_sigma_px must be > 0");
+  if (min_tracks < 6) throw std::invalid_argument("motion_prior.min_tracks must be >= 6");
+  if (max_tracks < min_tracks) {
+    throw std::invalid_argument("motion_prior.max_tracks must be >= motion_prior.min_tracks");
+  }
+  for (const double v : {min_rotation_sigma, min_translation_sigma, fallback_rotation_sigma,
+                         fallback_translation_sigma}) {
+    if (!(v > 0.0)) throw std::invalid_argument("motion_prior sigmas must be > 0");
+  }
+}
+
+namespace {
+
+Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
+  Eigen::Matrix<double, 6, 1> d;
+  d << Eigen::Vector3d::Constant(rotation * rotation),
+      Eigen::Vector3d::Constant(translation * translation);
+  return d.asDiagonal();
+}
+
+}  // namespace
+
+MotionPriorEstimator::MotionPriorEstimator(
+    const MotionPriorParams& params, const mapping::MotionOnlyBundleAdjustmentParams& motion_ba)
+    : params_(params), motion_ba_(motion_ba), flow_(params.flow) {
+  params_.validate();
+}
+
+MotionPrior MotionPriorEstimator::fallback(const geometry::SE3& T_guess, double scene_depth) const {
+  MotionPrior prior;
+  prior.T_cur_world = T_guess;
+  prior.Sigma = diagonalSigma(params_.fallback_rotation_sigma,
+                              params_.fallback_translation_sigma * scene_depth);
+  return prior;
+}
+
+MotionPrior MotionPriorEstimator::estimate(
+    const ImagePyramid& previous, const ImagePyramid& current, const std::vector<FlowSeed>& seeds,
+    const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess, double scene_depth,
+    const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
+    std::vector<unsigned char>* extra_ok) {
+  // An even subset of the seeds is plenty for six pose parameters and bounds the flow's cost.
+  std::vector<FlowSeed> picked;
+  const std::size_t n = std::min<std::size_t>(seeds.size(), params_.max_tracks);
+  for (std::size_t k = 0; k < n; ++k)
+    picked.push_back(seeds[k * seeds.size() / n]);
+  std::vector<cv::Point2f> from;
+  from.reserve(picked.size() + extra_px.size());
+  for (const FlowSeed& seed : picked)
+    from.push_back(seed.px);
+  from.insert(from.end(), extra_px.begin(), extra_px.end());
+  std::vector<cv::Point2f> to;
+  std::vector<unsigned char> ok;
+  flow_.track(previous, current, from, &to, &ok);
+  extra_tracked->assign(to.begin() + picked.size(), to.end());
+  extra_ok->assign(ok.begin() + picked.size(), ok.end());
+
+  mapping::MotionOnlyInput input;
+  input.T_cam_world_guess = T_guess;
+  input.focal_length_px = 0.5 * (camera.calibration().fx + camera.calibration().fy);
+  for (std::size_t i = 0; i < picked.size(); ++i) {
+    if (!ok[i]) continue;
+    input.observations.push_back(
+        {picked[i].p_world, camera.undistortToNormalized(Eigen::Vector2d(to[i].x, to[i].y))});
+  }
+  if (static_cast<int>(input.observations.size()) < params_.min_tracks) {
+    return fallback(T_guess, scene_depth);
+  }
+  mapping::MotionOnlyResult result;
+  try {
+    result = mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+  } catch (const std::invalid_argument&) {
+    return fallback(T_guess, scene_depth);
+  }
+  int inliers = 0;
+  for (const bool inlier : result.inlier)
+    inliers += inlier;
+  if (inliers < params_.min_tracks) return fallback(T_guess, scene_depth);
+  MotionPrior prior;
+  prior.T_cur_world = result.T_cam_world;
+  prior.from_flow = true;
+  prior.num_tracks = inliers;
+  // Sigma_Delta = sigma_flow^2 (J^T J)^-1, floored: the flow error is not the only error.
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(result.information);
+  const Eigen::Matrix<double, 6, 6> Sigma =
+      ldlt.info() == Eigen::Success
+          ? Eigen::Matrix<double, 6, 6>(ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity()))
+          : Eigen::Matrix<double, 6, 6>(Eigen::Matrix<double, 6, 6>::Zero());
+  prior.Sigma =
+      Sigma * params_.flow_sigma_px * params_.flow_sigma_px +
+      diagonalSigma(params_.min_rotation_sigma, params_.min_translation_sigma * scene_depth);
+  if (!prior.Sigma.allFinite()) return fallback(T_guess, scene_depth);
+  return prior;
+}
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,99 @@
+#include "scale_drift_slam/tracking/optical_flow.h"
+
+#include <stdexcept>
+
+namespace scale_drift_slam::tracking {
+
+FlowMethod parseFlowMethod(const std::string& name) {
+  if (name == "lucas_kanade" || name == "lk") return FlowMethod::kLucasKanade;
+  if (name == "dis") return FlowMethod::kDis;
+  throw std::invalid_argument("unknown optical flow method '" + name +
+                              "' (accepted: lucas_kanade, dis)");
+}
+
+std::string flowMethodName(FlowMethod method) {
+  return method == FlowMethod::kDis ? "dis" : "lucas_kanade";
+}
+
+void OpticalFlowParams::validate() const {
+  if (window < 5 || window % 2 == 0) {
+    throw std::invalid_argument("flow.window must be odd and >= 5");
+  }
+  if (pyramid_levels < 1 || pyramid_levels > 8) {
+    throw std::invalid_argument("flow.pyramid_levels must be in [1, 8]");
+  }
+  if (max_iterations < 1) throw std::invalid_argument("flow.max_iterations must be >= 1");
+  if (!(max_error > 0.0)) throw std::invalid_argument("flow.max_error must be > 0");
+  if (dis_preset < 0 || dis_preset > 2)
+    throw std::invalid_argument("flow.dis_preset must be 0, 1 or 2");
+}
+
+OpticalFlow::OpticalFlow(const OpticalFlowParams& params) : params_(params) {
+  params_.validate();
+  if (params_.method == FlowMethod::kDis) dis_ = cv::DISOpticalFlow::create(params_.dis_preset);
+}
+
+void OpticalFlow::track(const ImagePyramid& previous, const ImagePyramid& current,
+                        const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
+                        std::vector<unsigned char>* ok) {
+  to->assign(from.size(), cv::Point2f(0.f, 0.f));
+  ok->assign(from.size(), 0);
+  if (from.empty() || previous.levels.empty() || current.levels.empty()) return;
+  if (previous.base().size() != current.base().size()) return;
+  if (params_.method == FlowMethod::kDis) {
+    trackDis(previous, current, from, to, ok);
+  } else {
+    trackLucasKanade(previous, current, from, to, ok);
+  }
+  const cv::Size size = current.base().size();
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const cv::Point2f& p = (*to)[i];
+    if (!(p.x >= 0.f && p.y >= 0.f && p.x <= size.width - 1.f && p.y <= size.height - 1.f)) {
+      (*ok)[i] = 0;
+    }
+  }
+}
+
+void OpticalFlow::trackLucasKanade(const ImagePyramid& previous, const ImagePyramid& current,
+                                   const std::vector<cv::Point2f>& from,
+                                   std::vector<cv::Point2f>* to,
+                                   std::vector<unsigned char>* ok) const {
+  const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
+  const std::vector<cv::Mat> prev_levels(previous.levels.begin(), previous.levels.begin() + levels);
+  const std::vector<cv::Mat> cur_levels(current.levels.begin(), current.levels.begin() + levels);
+  const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                  params_.max_iterations, 0.01);
+  const cv::Size window(params_.window, params_.window);
+  std::vector<float> error;
+  cv::calcOpticalFlowPyrLK(prev_levels, cur_levels, from, *to, *ok, error, window, levels - 1,
+                           criteria);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    if (error[i] > params_.max_error) (*ok)[i] = 0;
+  }
+  if (params_.max_forward_backward_px <= 0.0) return;
+  std::vector<cv::Point2f> back = from;
+  std::vector<unsigned char> back_ok;
+  cv::calcOpticalFlowPyrLK(cur_levels, prev_levels, *to, back, back_ok, error, window, levels - 1,
+                           criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+  const double max_sq = params_.max_forward_backward_px * params_.max_forward_backward_px;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const cv::Point2f d = back[i] - from[i];
+    if (!back_ok[i] || d.dot(d) > max_sq) (*ok)[i] = 0;
+  }
+}
+
+void OpticalFlow::trackDis(const ImagePyramid& previous, const ImagePyramid& current,
+                           const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
+                           std::vector<unsigned char>* ok) {
+  // DIS wants continuous images: copy the ROIs out of their padded buffers.
+  dis_->calc(previous.base().clone(), current.base().clone(), flow_);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const int x = cvRound(from[i].x), y = cvRound(from[i].y);
+    if (x < 0 || y < 0 || x >= flow_.cols || y >= flow_.rows) continue;
+    const cv::Vec2f f = flow_.at<cv::Vec2f>(y, x);
+    (*to)[i] = from[i] + cv::Point2f(f[0], f[1]);
+    (*ok)[i] = 1;
+  }
+}
+
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,206 @@
+#include "scale_drift_slam/tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <stdexcept>
+
+namespace scale_drift_slam::tracking {
+namespace {
+
+class Stopwatch {
+ public:
+  double lapMs() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    last_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+/// CPU time of the calling thread in milliseconds.
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+}  // namespace
+
+void TrackerParams::validate() const {
+  if (pyramid_levels < 1 || pyramid_levels > 8) {
+    throw std::invalid_argument("tracker.pyramid_levels must be in [1, 8]");
+  }
+  if (!(min_contrast >= 0.0)) throw std::invalid_argument("tracker.min_contrast must be >= 0");
+  if (min_inliers < 6) throw std::invalid_argument("tracker.min_inliers must be >= 6");
+  if (good_inliers < min_inliers) {
+    throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
+  }
+  if (local_recent_keyframes < 1 || local_nearest_keyframes < 0) {
+    throw std::invalid_argument(
+        "tracker.local_recent_keyframes must be >= 1, "
+        "local_nearest_keyframes >= 0");
+  }
+  if (keyframe_corners < 0) throw std::invalid_argument("tracker.keyframe_corners must be >= 0");
+  if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
+    throw std::invalid_argument(
+        "tracker: need retire_after_searches >= 1 and retire_found_ratio in [0, 1]");
+  }
+  features.validate();
+  initializer.validate();
+  motion_prior.validate();
+  search.validate();
+  motion_ba.validate();
+  candidates.validate();
+  keyframes.validate();
+}
+
+std::string trackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kInitializing:
+      return "initializing";
+    case TrackingState::kGood:
+      return "good";
+    case TrackingState::kWeak:
+      return "weak";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "unknown";
+}
+
+Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params)
+    : camera_(std::move(camera)),
+      params_(params),
+      focal_(camera_ ? 0.5 * (camera_->calibration().fx + camera_->calibration().fy) : 0.0),
+      initializer_(camera_, params.initializer, params.features, params.motion_prior.flow),
+      motion_prior_(params.motion_prior, params.motion_ba),
+      candidates_(params.candidates, params.features, focal_) {
+  params_.validate();
+}
+
+FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding) {
+  Stopwatch total, stage;
+  const double cpu_start = threadCpuMs();
+  FrameResult result;
+  result.timestamp = timestamp;
+  result.state = state_;
+  ++frame_index_;
+  cv::Mat grey;
+  try {
+    grey = toGrey(image, encoding);
+  } catch (const std::invalid_argument& e) {
+    result.rejected = true;
+    result.message = std::string("frame rejected: ") + e.what();
+    return result;
+  }
+  const std::string problem =
+      frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
+  if (!problem.empty()) {
+    result.rejected = true;
+    result.message = "frame rejected: " + problem;
+    return result;
+  }
+  const ImagePyramid pyramid =
+      buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
+  result.times.prepare = stage.lapMs();
+  try {
+    if (state_ == TrackingState::kInitializing) {
+      initialise(timestamp, pyramid, &result);
+    } else {
+      track(timestamp, pyramid, &result);
+    }
+  } catch (const cv::Exception& e) {
+    // An image OpenCV cannot process must not end the run: report it, keep the state.
+    result = FrameResult{};
+    result.timestamp = timestamp;
+    result.rejected = true;
+    result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
+  }
+  result.state = state_;
+  result.times.total = total.lapMs();
+  result.times.cpu = threadCpuMs() - cpu_start;
+  return result;
+}
+
+void Tracker::applyMapUpdate(const map::MapUpdate& update) {
+  if (map_.apply(update)) candidates_.apply(update);
+}
+
+map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
+                                           const ImagePyramid& image) {
+  map::KeyframeMessage message;
+  message.keyframe.id = next_keyframe_id_++;
+  message.keyframe.timestamp = timestamp;
+  message.keyframe.T_kf_world = T_kf_world;
+  message.image = image.base().clone();
+  for (const cv::KeyPoint& corner :
+       detectSpreadCorners(image.base(), params_.keyframe_corners, params_.features)) {
+    message.corners_px.emplace_back(corner.pt.x, corner.pt.y);
+  }
+  return message;
+}
+
+void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResult* result) {
+  std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
+  result->message = initializer_.status();
+  if (!initial) return;
+  map::KeyframeMessage first =
+      makeKeyframe(initial->first_timestamp, geometry::SE3(), initial->first_image);
+  map::KeyframeMessage second = makeKeyframe(timestamp, initial->T_second_first, image);
+  TrackedKeyframe first_kf{
+      first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}};
+  TrackedKeyframe second_kf{second.keyframe.id, timestamp, second.keyframe.T_kf_world, {}};
+  previous_measurements_.clear();
+  std::vector<Eigen::Vector2d> occupied;
+  for (std::size_t i = 0; i < initial->p_first.size(); ++i) {
+    if (!initial->triangulated[i]) continue;
+    TrackedPoint point;
+    if (!point.appearance.cut(initial->first_image, initial->px_first[i])) continue;
+    point.id = next_point_id_++;
+    point.p_world = initial->p_first[i];
+    point.reference_keyframe = first.keyframe.id;
+    first.new_points.push_back({point.id, point.p_world, first.keyframe.id});
+    first.keyframe.observations.push_back({point.id, initial->xy_first[i]});
+    second.keyframe.observations.push_back({point.id, initial->xy_second[i]});
+    first_kf.points.push_back(point.id);
+    second_kf.points.push_back(point.id);
+    previous_measurements_.push_back({point.id, initial->px_second[i], initial->xy_second[i]});
+    occupied.push_back(initial->px_second[i]);
+    map_.addPoint(std::move(point));
+  }
+  map_.addKeyframe(std::move(first_kf));
+  map_.addKeyframe(std::move(second_kf));
+  state_ = TrackingState::kGood;
+  T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
+  previous_image_ = image;
+  last_scene_depth_ = sceneDepth(initial->T_second_first);
+  candidates_.spawn(second.keyframe.id, initial->T_second_first, image, occupied, last_scene_depth_,
+                    *camera_);
+  result->has_pose = true;
+  result->T_cam_world = initial->T_second_first;
+  result->num_inliers = static_cast<int>(previous_measurements_.size());
+  result->keyframes.push_back(std::move(first));
+  result->keyframes.push_back(std::move(second));
+}
+
+double Tracker::sceneDepth(const geometry::SE3& T_cam_world) const {
+  std::vector<double> depths;
+  for (const Measurement& m : previous_measurements_) {
+    const double z = map_.hasPoint(m.id) ? (T_cam_world * map_.point(m.id).p_world).z() : -1.0;
+    if (z > 0.0) depths.push_back(z);
+  }
+  const double depth = median(depths);
+  return depth > 0.0 ? depth : last_scene_depth_;
+}
+
+}  // namespace scale_drift_slam::tracking

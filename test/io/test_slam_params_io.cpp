@@ -1,0 +1,57 @@
+// The SLAM parameter file: config/default.yaml holds exactly the defaults of the structs, keys
+// override them, the printed form loads back to the same values, and typos or bad values are
+// refused with the file and the key.
+
+#include <gtest/gtest.h>
+
+#include "scale_drift_slam/io/slam_params_io.h"
+
+namespace scale_drift_slam::io {
+namespace {
+
+void expectFailure(const std::string& text, const std::string& reason) {
+  try {
+    parseSlamParams(text, "test.yaml");
+    ADD_FAILURE() << "accepted: " << text;
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("test.yaml"), std::string::npos) << message;
+    EXPECT_NE(message.find(reason), std::string::npos) << message;
+  }
+}
+
+TEST(SlamParamsIo, DefaultFileEqualsTheStructDefaults) {
+  const mapping::SlamParams from_file =
+      loadSlamParams(std::string(SDS_TEST_DATA_DIR) + "/../../config/default.yaml");
+  EXPECT_EQ(formatSlamParams(from_file), formatSlamParams(mapping::SlamParams{}));
+}
+
+TEST(SlamParamsIo, KeysOverrideDefaults) {
+  const auto p = parseSlamParams(
+      "tracker:\n  good_inliers: 70\nflow:\n  method: dis\nwindow_ba:\n  window_size: 7\n"
+      "motion_ba:\n  solver: ceres\nsystem:\n  mapping_thread: false\n");
+  EXPECT_EQ(p.tracker.good_inliers, 70);
+  EXPECT_EQ(p.tracker.motion_prior.flow.method, tracking::FlowMethod::kDis);
+  EXPECT_EQ(p.mapper.window.window_size, 7);
+  EXPECT_EQ(p.tracker.motion_ba.solver, mapping::MotionOnlySolver::kCeres);
+  EXPECT_FALSE(p.mapping_thread);
+  EXPECT_EQ(p.tracker.min_inliers, mapping::SlamParams{}.tracker.min_inliers);
+  // The printed form reads back to the same values.
+  EXPECT_EQ(formatSlamParams(parseSlamParams(formatSlamParams(p))), formatSlamParams(p));
+  EXPECT_EQ(formatSlamParams(parseSlamParams("")), formatSlamParams(mapping::SlamParams{}));
+}
+
+TEST(SlamParamsIo, RefusesTyposAndBadValues) {
+  expectFailure("trackr:\n  good_inliers: 3\n", "unknown section 'trackr'");
+  expectFailure("tracker:\n  good_inlier: 3\n", "unknown key 'tracker.good_inlier'");
+  expectFailure("tracker:\n  good_inliers: many\n", "tracker.good_inliers");
+  expectFailure("tracker:\n  good_inliers: 5\n", "good_inliers");
+  expectFailure("flow:\n  method: horn_schunck\n", "flow.method");
+  expectFailure("search:\n  min_ncc: 2\n", "min_ncc");
+  expectFailure("[1, 2]", "mapping of sections");
+  expectFailure("tracker: [", "not valid YAML");
+  EXPECT_THROW(loadSlamParams("/nonexistent/params.yaml"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace scale_drift_slam::io

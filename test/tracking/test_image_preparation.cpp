@@ -1,0 +1,75 @@
+// Image preparation: every encoding a camera or bag delivers becomes the same grey image, a wrong
+// encoding is refused with a reason, and unusable frames (black, blank, wrong size) are named.
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "scale_drift_slam/tracking/image_preparation.h"
+#include "synthetic_images.h"
+
+namespace scale_drift_slam::tracking {
+namespace {
+
+TEST(ImagePreparation, AllEncodingsGiveTheSameGrey) {
+  const cv::Mat grey = test::texturedImage(64, 48, 1);
+  cv::Mat bgr, rgb, bgra, rgba, mono16;
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(grey, rgb, cv::COLOR_GRAY2RGB);
+  cv::cvtColor(grey, bgra, cv::COLOR_GRAY2BGRA);
+  cv::cvtColor(grey, rgba, cv::COLOR_GRAY2RGBA);
+  grey.convertTo(mono16, CV_16U, 256.0);
+  const std::pair<cv::Mat, std::string> inputs[] = {{grey, "mono8"}, {bgr, "bgr8"},
+                                                    {rgb, "rgb8"},   {bgra, "bgra8"},
+                                                    {rgba, "rgba8"}, {mono16, "mono16"}};
+  for (const auto& [image, name] : inputs) {
+    const cv::Mat out = toGrey(image, parsePixelEncoding(name));
+    ASSERT_EQ(out.type(), CV_8UC1) << name;
+    EXPECT_EQ(cv::norm(out, grey, cv::NORM_INF), 0.0) << name;
+    EXPECT_EQ(pixelEncodingName(parsePixelEncoding(name)), name);
+  }
+}
+
+TEST(ImagePreparation, ColourChannelOrderMatters) {
+  cv::Mat red(4, 4, CV_8UC3, cv::Scalar(0, 0, 255));  // BGR red
+  const cv::Mat as_bgr = toGrey(red, PixelEncoding::kBgr8);
+  const cv::Mat as_rgb = toGrey(red, PixelEncoding::kRgb8);
+  EXPECT_NEAR(as_bgr.at<unsigned char>(0, 0), 76, 1);  // 0.299 * 255
+  EXPECT_NEAR(as_rgb.at<unsigned char>(0, 0), 29, 1);  // 0.114 * 255
+}
+
+TEST(ImagePreparation, RefusesWrongEncodingsWithAReason) {
+  const cv::Mat bgr(8, 8, CV_8UC3, cv::Scalar(1, 2, 3));
+  try {
+    toGrey(bgr, PixelEncoding::kMono8);
+    ADD_FAILURE() << "accepted a 3-channel image as mono8";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mono8"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(toGrey(cv::Mat(), PixelEncoding::kMono8), std::invalid_argument);
+  EXPECT_THROW(toGrey(cv::Mat(4, 4, CV_32FC1), PixelEncoding::kMono16), std::invalid_argument);
+  EXPECT_THROW(parsePixelEncoding("yuv422"), std::invalid_argument);
+  EXPECT_THROW(encodingOfMat(cv::Mat(4, 4, CV_32FC3)), std::invalid_argument);
+  EXPECT_EQ(encodingOfMat(bgr), PixelEncoding::kBgr8);
+}
+
+TEST(ImagePreparation, NamesUnusableFrames) {
+  EXPECT_EQ(frameProblem(test::texturedImage(64, 48, 2), 64, 48, 2.0), "");
+  EXPECT_NE(frameProblem(cv::Mat::zeros(48, 64, CV_8UC1), 64, 48, 2.0).find("texture"),
+            std::string::npos);
+  EXPECT_NE(frameProblem(cv::Mat(48, 64, CV_8UC1, cv::Scalar(255)), 64, 48, 2.0), "");
+  EXPECT_NE(frameProblem(cv::Mat::zeros(3, 2, CV_8UC1), 64, 48, 2.0).find("3"), std::string::npos);
+  EXPECT_NE(frameProblem(cv::Mat(), 64, 48, 2.0), "");
+}
+
+TEST(ImagePreparation, PyramidHalvesEachLevel) {
+  const ImagePyramid pyramid = buildPyramid(test::texturedImage(640, 480, 3), 4);
+  ASSERT_EQ(pyramid.numLevels(), 4);
+  EXPECT_EQ(pyramid.levels[3].cols, 80);
+  EXPECT_EQ(pyramid.levels[3].rows, 60);
+  // A tiny image stops early instead of producing empty levels.
+  EXPECT_EQ(buildPyramid(cv::Mat(100, 100, CV_8UC1, cv::Scalar(5)), 6).numLevels(), 3);
+  EXPECT_THROW(buildPyramid(cv::Mat(), 2), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace scale_drift_slam::tracking

@@ -1,0 +1,85 @@
+// The tracker's map copy: map updates move known keyframes and points, drop removed points,
+// ignore stale versions, and a Sim(3) loop correction moves keyframes and points together (a
+// point's projection into a keyframe does not change); local points come from the newest and
+// the nearest keyframes, each once.
+
+#include <algorithm>
+
+#include <gtest/gtest.h>
+
+#include "scale_drift_slam/geometry/so3.h"
+#include "scale_drift_slam/tracking/tracking_map.h"
+
+namespace scale_drift_slam::tracking {
+namespace {
+
+TrackingMap smallMap() {
+  TrackingMap map;
+  for (map::KeyframeId id = 0; id < 4; ++id) {
+    // Keyframes 1 m apart along x, looking along z.
+    map.addKeyframe(
+        {id,
+         0.1 * id,
+         geometry::SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-1.0 * id, 0, 0)),
+         {}});
+  }
+  for (map::PointId id = 0; id < 8; ++id) {
+    TrackedPoint point;
+    point.id = id;
+    point.p_world = Eigen::Vector3d(0.5 * id, 0.1 * id, 4.0);
+    point.reference_keyframe = id / 2;
+    map.addPoint(std::move(point));
+    map.linkPoint(id / 2, id);
+  }
+  return map;
+}
+
+TEST(TrackingMap, AppliesUpdatesByVersion) {
+  TrackingMap map = smallMap();
+  map::MapUpdate update;
+  update.map_version = 5;
+  const geometry::SE3 moved(geometry::expSO3(Eigen::Vector3d(0, 0.1, 0)), Eigen::Vector3d(1, 2, 3));
+  update.keyframe_poses = {{2, moved}, {99, moved}};
+  update.point_positions = {{3, Eigen::Vector3d(7, 8, 9)}, {77, Eigen::Vector3d::Zero()}};
+  update.removed_points = {4};
+  EXPECT_TRUE(map.apply(update));
+  EXPECT_LT((map.keyframe(2).T_kf_world.translation() - moved.translation()).norm(), 1e-12);
+  EXPECT_EQ(map.point(3).p_world, Eigen::Vector3d(7, 8, 9));
+  EXPECT_FALSE(map.hasPoint(4));
+  EXPECT_FALSE(map.hasKeyframe(99));
+  map::MapUpdate stale;
+  stale.map_version = 4;
+  stale.point_positions = {{3, Eigen::Vector3d::Zero()}};
+  EXPECT_FALSE(map.apply(stale));
+  EXPECT_EQ(map.point(3).p_world, Eigen::Vector3d(7, 8, 9));
+}
+
+TEST(TrackingMap, Sim3CorrectionKeepsProjections) {
+  TrackingMap map = smallMap();
+  const Eigen::Vector2d before = (map.keyframe(1).T_kf_world * map.point(2).p_world).hnormalized();
+  map::MapUpdate update;
+  update.map_version = 1;
+  update.S_new_old = geometry::Sim3(geometry::expSO3(Eigen::Vector3d(0.2, -0.1, 0.3)),
+                                    Eigen::Vector3d(1, -2, 0.5), std::log(1.7));
+  map.apply(update);
+  const Eigen::Vector3d p_kf = map.keyframe(1).T_kf_world * map.point(2).p_world;
+  EXPECT_LT((p_kf.hnormalized() - before).norm(), 1e-12);
+  // The camera centre moves with the similarity.
+  EXPECT_LT((map.keyframe(1).T_kf_world.inverseTranslation() -
+             *update.S_new_old * Eigen::Vector3d(1, 0, 0))
+                .norm(),
+            1e-12);
+}
+
+TEST(TrackingMap, LocalPointsFromNewestAndNearestKeyframes) {
+  TrackingMap map = smallMap();
+  map.linkPoint(3, 0);  // point 0 is also seen by keyframe 3: it must come once
+  // Newest keyframe (3) and the one nearest to x = 0.1 (keyframe 0).
+  std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, 1);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<map::PointId>{0, 1, 6, 7}));
+  EXPECT_EQ(map.keyframeCentres().size(), 4u);
+}
+
+}  // namespace
+}  // namespace scale_drift_slam::tracking
