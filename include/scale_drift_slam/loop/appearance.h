@@ -1,0 +1,71 @@
+#pragma once
+// What place recognition needs of a keyframe image: ORB keypoints spread over the image and
+// their 256-bit descriptors. Compact (about 41 bytes per keypoint) so that the keyframe message
+// carries it and the loop-closure side never needs the raw image.
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "scale_drift_slam/loop/place_recognition_params.h"
+
+namespace scale_drift_slam::loop {
+
+/// Bytes of one ORB descriptor (256 bits). The vocabulary and the matcher assume it.
+constexpr int kDescriptorBytes = 32;
+
+/// Keypoints and descriptors of one keyframe image. Row i of `descriptors` (CV_8UC1,
+/// n x kDescriptorBytes) describes keypoint i. Pixel coordinates of the image it was computed on.
+struct KeyframeAppearance {
+  int image_width = 0;
+  int image_height = 0;
+  std::vector<cv::Point2f> keypoints;
+  std::vector<std::uint8_t> octaves;  ///< ORB pyramid level of each keypoint.
+  cv::Mat descriptors;
+
+  std::size_t size() const { return keypoints.size(); }
+  /// Throws std::invalid_argument when the parts disagree (sizes, descriptor type or width, a
+  /// keypoint outside the image, a non-positive image size).
+  void validate() const;
+  /// The descriptor of keypoint i as kDescriptorBytes bytes.
+  const std::uint8_t* descriptor(std::size_t i) const { return descriptors.ptr<std::uint8_t>(i); }
+};
+
+/// Computes KeyframeAppearance from grey images. Owns an OpenCV ORB detector; not thread-safe:
+/// use one per thread (the tracking thread, when it drops a keyframe).
+class AppearanceExtractor {
+ public:
+  /// Throws std::invalid_argument when the params are invalid.
+  explicit AppearanceExtractor(const AppearanceParams& params);
+
+  /// Detects up to max_features ORB keypoints spread over the grid and describes them. Accepts
+  /// CV_8UC1 (or CV_8UC3 / CV_8UC4, converted to grey). Throws std::invalid_argument for an
+  /// empty image, another depth, or an image too small for the ORB border.
+  KeyframeAppearance extract(const cv::Mat& image);
+
+  const AppearanceParams& params() const { return params_; }
+
+ private:
+  std::vector<cv::KeyPoint> detectSpread(const cv::Mat& grey);
+
+  AppearanceParams params_;
+  cv::Ptr<cv::ORB> orb_;
+};
+
+/// Hamming distance of two 256-bit descriptors.
+inline int hammingDistance(const std::uint8_t* a, const std::uint8_t* b) {
+  int distance = 0;
+  for (int i = 0; i < kDescriptorBytes; i += 8) {
+    std::uint64_t x = 0;
+    std::uint64_t y = 0;
+    std::memcpy(&x, a + i, 8);
+    std::memcpy(&y, b + i, 8);
+    distance += __builtin_popcountll(x ^ y);
+  }
+  return distance;
+}
+
+}  // namespace scale_drift_slam::loop

@@ -1,0 +1,167 @@
+// ORB appearance of keyframe images and the geometric check, on procedural views with a known
+// homography between them: overlapping views match with correct inliers, unrelated views do not,
+// and an identical poster in two different places is refused by the coverage test.
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include "scale_drift_slam/loop/appearance.h"
+#include "scale_drift_slam/loop/geometric_check.h"
+
+#include "synthetic_views.h"
+
+namespace scale_drift_slam::loop {
+namespace {
+
+using testing::makeTexture;
+using testing::renderView;
+using testing::ViewPose;
+
+ViewPose at(double x, double y) {
+  ViewPose pose;
+  pose.x = x;
+  pose.y = y;
+  return pose;
+}
+
+class AppearanceTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { texture_ = new cv::Mat(makeTexture(3000, 900, 21)); }
+  static void TearDownTestSuite() { delete texture_; }
+  static const cv::Mat& texture() { return *texture_; }
+  AppearanceParams params_;
+  GeometricCheckParams geometry_;
+
+ private:
+  static cv::Mat* texture_;
+};
+cv::Mat* AppearanceTest::texture_ = nullptr;
+
+TEST_F(AppearanceTest, BoundedCountSpreadOverTheImage) {
+  AppearanceExtractor extractor(params_);
+  const KeyframeAppearance appearance = extractor.extract(renderView(texture(), at(1000, 450), 1));
+  EXPECT_NO_THROW(appearance.validate());
+  EXPECT_EQ(appearance.image_width, 640);
+  EXPECT_EQ(appearance.image_height, 480);
+  EXPECT_GT(appearance.size(), 900u);
+  EXPECT_LE(appearance.size(), static_cast<std::size_t>(params_.max_features));
+  // Nearly every cell of the spreading grid holds keypoints (a blank cell may not), none more
+  // than 3x its fair share.
+  std::vector<int> per_cell(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows), 0);
+  for (const cv::Point2f& p : appearance.keypoints) {
+    ++per_cell[static_cast<std::size_t>(static_cast<int>(p.y * params_.grid_rows / 480) *
+                                            params_.grid_cols +
+                                        static_cast<int>(p.x * params_.grid_cols / 640))];
+  }
+  const double fair = static_cast<double>(appearance.size()) / per_cell.size();
+  int empty = 0;
+  for (int count : per_cell) {
+    empty += count == 0 ? 1 : 0;
+    EXPECT_LT(count, 3.0 * fair);
+  }
+  EXPECT_LE(empty, 2);
+}
+
+TEST_F(AppearanceTest, ColourAndGreyImagesGiveTheSameAppearance) {
+  AppearanceExtractor extractor(params_);
+  const cv::Mat grey = renderView(texture(), at(1500, 450), 2);
+  cv::Mat colour;
+  cv::cvtColor(grey, colour, cv::COLOR_GRAY2BGR);
+  const KeyframeAppearance a = extractor.extract(grey);
+  const KeyframeAppearance b = extractor.extract(colour);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(cv::norm(a.descriptors, b.descriptors, cv::NORM_HAMMING), 0.0);
+}
+
+TEST_F(AppearanceTest, RejectsBadImagesAndInconsistentAppearances) {
+  AppearanceExtractor extractor(params_);
+  EXPECT_THROW(extractor.extract(cv::Mat()), std::invalid_argument);
+  EXPECT_THROW(extractor.extract(cv::Mat(480, 640, CV_32FC1, cv::Scalar(0))),
+               std::invalid_argument);
+  EXPECT_THROW(extractor.extract(cv::Mat(40, 40, CV_8UC1, cv::Scalar(0))), std::invalid_argument);
+  // A blank image is valid and has no keypoints.
+  const KeyframeAppearance blank = extractor.extract(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)));
+  EXPECT_EQ(blank.size(), 0u);
+  EXPECT_NO_THROW(blank.validate());
+
+  KeyframeAppearance appearance = extractor.extract(renderView(texture(), at(1000, 450), 3));
+  KeyframeAppearance broken = appearance;
+  broken.octaves.pop_back();
+  EXPECT_THROW(broken.validate(), std::invalid_argument);
+  broken = appearance;
+  broken.keypoints[0].x = 700.0f;
+  EXPECT_THROW(broken.validate(), std::invalid_argument);
+  broken = appearance;
+  broken.descriptors = broken.descriptors.colRange(0, 16).clone();
+  EXPECT_THROW(broken.validate(), std::invalid_argument);
+
+  AppearanceParams bad = params_;
+  bad.min_fast_threshold = bad.fast_threshold + 1;
+  EXPECT_THROW(AppearanceExtractor{bad}, std::invalid_argument);
+}
+
+TEST_F(AppearanceTest, OverlappingViewsPassWithInliersThatObeyTheTrueHomography) {
+  AppearanceExtractor extractor(params_);
+  const ViewPose first = at(1000, 450);
+  ViewPose second = at(1150, 420);  // 150 px along, rotated, zoomed, tilted, darker
+  second.angle_deg = 6.0;
+  second.scale = 1.1;
+  second.tilt_x = 1e-4;
+  second.gain = 0.8;
+  second.bias = 20.0;
+  const KeyframeAppearance a = extractor.extract(renderView(texture(), first, 4));
+  const KeyframeAppearance b = extractor.extract(renderView(texture(), second, 5));
+  const GeometricCheckResult result =
+      checkGeometry(a, b, matchDescriptors(a, b, geometry_), geometry_);
+  EXPECT_TRUE(result.passed) << result.reason;
+  EXPECT_GT(result.inliers, 150);
+  EXPECT_GT(result.coverage, 0.6);
+  // a pixel -> texture -> b pixel.
+  const cv::Matx33d H_b_a = testing::viewToTexture(second, cv::Size(640, 480)).inv() *
+                            testing::viewToTexture(first, cv::Size(640, 480));
+  int correct = 0;
+  for (const DescriptorMatch& m : result.inlier_matches) {
+    const cv::Point2f& p = a.keypoints[static_cast<std::size_t>(m.query)];
+    const cv::Vec3d h = H_b_a * cv::Vec3d(p.x, p.y, 1.0);
+    const cv::Point2d predicted(h[0] / h[2], h[1] / h[2]);
+    if (cv::norm(predicted - cv::Point2d(b.keypoints[static_cast<std::size_t>(m.candidate)])) <
+        4.0) {
+      ++correct;
+    }
+  }
+  EXPECT_GT(correct, 0.95 * result.inliers);
+}
+
+TEST_F(AppearanceTest, UnrelatedViewsFail) {
+  AppearanceExtractor extractor(params_);
+  const cv::Mat other = makeTexture(1500, 900, 22);
+  const KeyframeAppearance a = extractor.extract(renderView(texture(), at(1000, 450), 6));
+  const KeyframeAppearance b = extractor.extract(renderView(other, at(700, 450), 7));
+  const KeyframeAppearance c = extractor.extract(renderView(texture(), at(2300, 450), 8));
+  EXPECT_FALSE(checkGeometry(a, b, matchDescriptors(a, b, geometry_), geometry_).passed);
+  EXPECT_FALSE(checkGeometry(a, c, matchDescriptors(a, c, geometry_), geometry_).passed);
+}
+
+TEST_F(AppearanceTest, TheSamePosterInTwoPlacesIsRefusedByCoverage) {
+  // Two different walls with one identical poster (a quarter of the view) on each.
+  const cv::Mat poster = makeTexture(320, 240, 99);
+  cv::Mat wall_a = makeTexture(1500, 900, 23);
+  cv::Mat wall_b = makeTexture(1500, 900, 24);
+  testing::pastePoster(wall_a, poster, cv::Point(600, 300));
+  testing::pastePoster(wall_b, poster, cv::Point(700, 350));
+  AppearanceExtractor extractor(params_);
+  const KeyframeAppearance a = extractor.extract(renderView(wall_a, at(760, 420), 9));
+  ViewPose pose_b = at(900, 500);
+  pose_b.angle_deg = 3.0;
+  const KeyframeAppearance b = extractor.extract(renderView(wall_b, pose_b, 10));
+  const GeometricCheckResult result =
+      checkGeometry(a, b, matchDescriptors(a, b, geometry_), geometry_);
+  EXPECT_FALSE(result.passed);
+  // The poster itself matches well: it is the coverage test that refuses it.
+  EXPECT_GE(result.inliers, geometry_.min_inliers);
+  EXPECT_LT(result.coverage, geometry_.min_coverage);
+  EXPECT_NE(result.reason.find("cover"), std::string::npos) << result.reason;
+}
+
+}  // namespace
+}  // namespace scale_drift_slam::loop
