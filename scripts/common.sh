@@ -46,10 +46,11 @@ sds_build() {
   [[ ${#targets[@]} -gt 0 ]] || targets=(all)
   if [[ ! -f "$SDS_BUILD_DIR/CMakeCache.txt" ]]; then
     sds_log "configuring in $SDS_BUILD_DIR"
+    mkdir -p "$SDS_BUILD_DIR"
     cmake -S "$SDS_ROOT" -B "$SDS_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
       -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
-      -DCATKIN_ENABLE_TESTING=ON > "$SDS_BUILD_DIR.configure.log" 2>&1 ||
-      { cat "$SDS_BUILD_DIR.configure.log"; return 1; }
+      -DCATKIN_ENABLE_TESTING=ON > "$SDS_BUILD_DIR/configure.log" 2>&1 ||
+      { cat "$SDS_BUILD_DIR/configure.log"; return 1; }
   fi
   sds_log "building ${targets[*]} (-j$SDS_JOBS)"
   cmake --build "$SDS_BUILD_DIR" -j "$SDS_JOBS" --target "${targets[@]}"
