@@ -1,6 +1,8 @@
 #include "scale_drift_slam/loop/geometric_check.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <opencv2/calib3d.hpp>
@@ -49,8 +51,10 @@ std::vector<DescriptorMatch> oneToOne(std::vector<DescriptorMatch> matches) {
   return unique;
 }
 
-int countInliers(const cv::Mat& mask) {
-  return mask.empty() ? 0 : cv::countNonZero(mask);
+std::string format(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.2f", value);
+  return buffer;
 }
 
 }  // namespace
@@ -117,6 +121,53 @@ double gridCoverage(const KeyframeAppearance& appearance, const std::vector<int>
   return textured == 0 ? 0.0 : static_cast<double>(covered) / textured;
 }
 
+namespace {
+
+/// RANSAC iterations that find, with the wanted confidence, a model whose inlier share is at
+/// least `share` from minimal samples of `sample` matches: log(1 - p) / log(1 - share^sample)
+/// (Hartley & Zisserman, sec. 4.7.1). Models with a smaller share would be refused anyway.
+int iterationsFor(double share, int sample, const GeometricCheckParams& params) {
+  const double good_sample = std::pow(std::clamp(share, 1e-3, 1.0), sample);
+  if (good_sample >= 1.0) return 1;
+  const double n = std::log(1.0 - params.ransac_confidence) / std::log(1.0 - good_sample);
+  return static_cast<int>(std::clamp(std::ceil(n), 1.0, double(params.ransac_max_iterations)));
+}
+
+/// Fills the result from a RANSAC inlier mask and applies the acceptance tests.
+void evaluate(const KeyframeAppearance& query, const KeyframeAppearance& candidate,
+              const std::vector<DescriptorMatch>& matches, const cv::Mat& mask,
+              const GeometricCheckParams& params, GeometricCheckResult& result) {
+  std::vector<int> inliers_query;
+  std::vector<int> inliers_candidate;
+  result.inlier_matches.clear();
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    if (mask.empty() || mask.at<std::uint8_t>(static_cast<int>(k)) == 0) continue;
+    result.inlier_matches.push_back(matches[k]);
+    inliers_query.push_back(matches[k].query);
+    inliers_candidate.push_back(matches[k].candidate);
+  }
+  result.inliers = static_cast<int>(result.inlier_matches.size());
+  result.inlier_ratio = static_cast<double>(result.inliers) / result.matches;
+  result.coverage = std::min(gridCoverage(query, inliers_query, params),
+                             gridCoverage(candidate, inliers_candidate, params));
+  result.passed = false;
+  if (result.inliers < params.min_inliers) {
+    result.reason = "too few geometric inliers (" + std::to_string(result.inliers) + " < " +
+                    std::to_string(params.min_inliers) + ")";
+  } else if (result.inlier_ratio < params.min_inlier_ratio) {
+    result.reason =
+        "inlier ratio " + format(result.inlier_ratio) + " < " + format(params.min_inlier_ratio);
+  } else if (result.coverage < params.min_coverage) {
+    result.reason = "inliers cover " + format(result.coverage) + " of the image < " +
+                    format(params.min_coverage) + " (a local patch, e.g. a poster)";
+  } else {
+    result.reason.clear();
+    result.passed = true;
+  }
+}
+
+}  // namespace
+
 GeometricCheckResult checkGeometry(const KeyframeAppearance& query,
                                    const KeyframeAppearance& candidate,
                                    const std::vector<DescriptorMatch>& matches,
@@ -134,44 +185,26 @@ GeometricCheckResult checkGeometry(const KeyframeAppearance& query,
     points_query.push_back(query.keypoints.at(static_cast<std::size_t>(m.query)));
     points_candidate.push_back(candidate.keypoints.at(static_cast<std::size_t>(m.candidate)));
   }
+  // The smallest inlier share that could pass, which bounds the RANSAC iterations.
+  const double share =
+      std::max(params.min_inlier_ratio, static_cast<double>(params.min_inliers) / result.matches);
+  // A homography first (4-point samples, cheap): planar scenes and pure rotations, where the
+  // fundamental matrix is degenerate. OpenCV's USAC runs with a fixed seed: deterministic.
   cv::Mat mask;
-  cv::findFundamentalMat(points_query, points_candidate, cv::FM_RANSAC, params.ransac_threshold_px,
-                         params.ransac_confidence, params.ransac_max_iterations, mask);
-  result.model = "fundamental";
-  if (countInliers(mask) < params.min_inliers) {  // planar or rotation-only: try a homography
-    cv::Mat mask_h;
-    cv::findHomography(points_query, points_candidate, cv::RANSAC, params.ransac_threshold_px,
-                       mask_h, params.ransac_max_iterations, params.ransac_confidence);
-    if (countInliers(mask_h) > countInliers(mask)) {
-      mask = mask_h;
-      result.model = "homography";
-    }
-  }
-  std::vector<int> inliers_query;
-  std::vector<int> inliers_candidate;
-  for (std::size_t k = 0; k < matches.size(); ++k) {
-    if (mask.empty() || mask.at<std::uint8_t>(static_cast<int>(k)) == 0) continue;
-    result.inlier_matches.push_back(matches[k]);
-    inliers_query.push_back(matches[k].query);
-    inliers_candidate.push_back(matches[k].candidate);
-  }
-  result.inliers = static_cast<int>(result.inlier_matches.size());
-  result.inlier_ratio = static_cast<double>(result.inliers) / result.matches;
-  result.coverage = std::min(gridCoverage(query, inliers_query, params),
-                             gridCoverage(candidate, inliers_candidate, params));
-  if (result.inliers < params.min_inliers) {
-    result.reason = "too few geometric inliers (" + std::to_string(result.inliers) + " < " +
-                    std::to_string(params.min_inliers) + ")";
-  } else if (result.inlier_ratio < params.min_inlier_ratio) {
-    result.reason = "inlier ratio " + std::to_string(result.inlier_ratio) + " < " +
-                    std::to_string(params.min_inlier_ratio);
-  } else if (result.coverage < params.min_coverage) {
-    result.reason = "inliers cover " + std::to_string(result.coverage) + " of the image < " +
-                    std::to_string(params.min_coverage) + " (a local patch, e.g. a poster)";
-  } else {
-    result.passed = true;
-  }
-  return result;
+  cv::findHomography(points_query, points_candidate, cv::USAC_DEFAULT, params.ransac_threshold_px,
+                     mask, iterationsFor(share, 4, params), params.ransac_confidence);
+  result.model = "homography";
+  evaluate(query, candidate, matches, mask, params, result);
+  if (result.passed) return result;
+  // Then the general two-view geometry (7-point samples).
+  GeometricCheckResult epipolar = result;
+  mask.release();
+  cv::findFundamentalMat(points_query, points_candidate, cv::USAC_DEFAULT,
+                         params.ransac_threshold_px, params.ransac_confidence,
+                         iterationsFor(share, 7, params), mask);
+  epipolar.model = "fundamental";
+  evaluate(query, candidate, matches, mask, params, epipolar);
+  return epipolar.passed || epipolar.inliers > result.inliers ? epipolar : result;
 }
 
 }  // namespace scale_drift_slam::loop

@@ -46,6 +46,19 @@ std::string outputPath(const std::string& name) {
   return std::string(SDS_TEST_OUTPUT_DIR) + "/" + name;
 }
 
+TEST(Vocabulary, HammingDistanceEqualsOpenCvs) {
+  std::mt19937 rng(1);
+  const cv::Mat d = randomDescriptors(50, rng);
+  for (int i = 0; i < d.rows; ++i) {
+    for (int j = 0; j < d.rows; ++j) {
+      EXPECT_EQ(hammingDistance(d.ptr<std::uint8_t>(i), d.ptr<std::uint8_t>(j)),
+                static_cast<int>(cv::norm(d.row(i), d.row(j), cv::NORM_HAMMING)));
+    }
+  }
+  EXPECT_EQ(bitCount(~0ull), 64);
+  EXPECT_EQ(bitCount(0ull), 0);
+}
+
 TEST(Vocabulary, ClustersAroundKnownCentresBecomeOneWordEach) {
   std::mt19937 rng(3);
   const cv::Mat centres = randomDescriptors(8, rng);  // random centres are ~128 bits apart

@@ -27,7 +27,7 @@ struct GeometricCheckResult {
   int inliers = 0;            ///< Matches agreeing with the best model.
   double inlier_ratio = 0.0;  ///< inliers / matches.
   double coverage = 0.0;      ///< Covered grid cells / textured cells, the smaller of both images.
-  std::string model;          ///< "fundamental" or "homography" (the one with more inliers).
+  std::string model;          ///< "homography" or "fundamental": the model reported.
   std::vector<DescriptorMatch> inlier_matches;
   std::string reason;  ///< Why it failed; empty when passed.
 };
@@ -45,9 +45,11 @@ std::vector<DescriptorMatch> matchDescriptors(const KeyframeAppearance& query,
                                               const KeyframeAppearance& candidate,
                                               const GeometricCheckParams& params);
 
-/// RANSAC for a fundamental matrix and, when it falls short, a homography; then the inlier
-/// count, inlier ratio and coverage tests of GeometricCheckParams. Deterministic (OpenCV's
-/// RANSAC uses a fixed seed).
+/// RANSAC (OpenCV USAC) for a homography and, when that does not pass, a fundamental matrix;
+/// each model must pass the inlier count, inlier ratio and coverage tests of
+/// GeometricCheckParams. RANSAC only runs the iterations needed to find a model that could pass
+/// (its inlier share >= max(min_inlier_ratio, min_inliers / matches)), so hopeless candidates
+/// cost little. Deterministic (fixed RANSAC seed).
 GeometricCheckResult checkGeometry(const KeyframeAppearance& query,
                                    const KeyframeAppearance& candidate,
                                    const std::vector<DescriptorMatch>& matches,
