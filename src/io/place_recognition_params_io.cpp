@@ -71,7 +71,8 @@ loop::PlaceRecognitionParams parseRoot(const YAML::Node& root, const std::string
       {"coverage_rows", set(g.coverage_rows)},
       {"min_features_per_cell", set(g.min_features_per_cell)},
       {"min_inliers_per_cell", set(g.min_inliers_per_cell)},
-      {"min_coverage", set(g.min_coverage)}};
+      {"min_coverage", set(g.min_coverage)},
+      {"max_scale_change", set(g.max_scale_change)}};
   const std::map<std::string, Setter> top = {
       {"appearance", [&](const YAML::Node& n) { apply(n, "appearance.", appearance, origin); }},
       {"vocabulary", [&](const YAML::Node& n) { apply(n, "vocabulary.", vocabulary, origin); }},

@@ -96,6 +96,28 @@ std::vector<DescriptorMatch> matchDescriptors(const KeyframeAppearance& query,
   return oneToOne(std::move(matches));
 }
 
+double scaleChange(const KeyframeAppearance& query, const KeyframeAppearance& candidate,
+                   const std::vector<DescriptorMatch>& inliers) {
+  // Pairs (k, k + n/2): n well-separated pairs in deterministic order. Pairs closer than 10 px
+  // in either image say little about scale and are skipped.
+  const std::size_t n = inliers.size();
+  std::vector<double> ratios;
+  for (std::size_t k = 0; k < n; ++k) {
+    const DescriptorMatch& a = inliers[k];
+    const DescriptorMatch& b = inliers[(k + n / 2) % n];
+    const double d_query = cv::norm(query.keypoints.at(static_cast<std::size_t>(a.query)) -
+                                    query.keypoints.at(static_cast<std::size_t>(b.query)));
+    const double d_candidate =
+        cv::norm(candidate.keypoints.at(static_cast<std::size_t>(a.candidate)) -
+                 candidate.keypoints.at(static_cast<std::size_t>(b.candidate)));
+    if (d_query < 10.0 || d_candidate < 10.0) continue;
+    ratios.push_back(std::log(d_query / d_candidate));
+  }
+  if (ratios.size() < 2) return 1.0;
+  std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
+  return std::exp(std::abs(ratios[ratios.size() / 2]));
+}
+
 double gridCoverage(const KeyframeAppearance& appearance, const std::vector<int>& selected,
                     const GeometricCheckParams& params) {
   const int cols = params.coverage_cols;
@@ -150,6 +172,7 @@ void evaluate(const KeyframeAppearance& query, const KeyframeAppearance& candida
   result.inlier_ratio = static_cast<double>(result.inliers) / result.matches;
   result.coverage = std::min(gridCoverage(query, inliers_query, params),
                              gridCoverage(candidate, inliers_candidate, params));
+  result.scale_change = scaleChange(query, candidate, result.inlier_matches);
   result.passed = false;
   if (result.inliers < params.min_inliers) {
     result.reason = "too few geometric inliers (" + std::to_string(result.inliers) + " < " +
@@ -160,6 +183,9 @@ void evaluate(const KeyframeAppearance& query, const KeyframeAppearance& candida
   } else if (result.coverage < params.min_coverage) {
     result.reason = "inliers cover " + format(result.coverage) + " of the image < " +
                     format(params.min_coverage) + " (a local patch, e.g. a poster)";
+  } else if (result.scale_change > params.max_scale_change) {
+    result.reason = "the views differ in scale by " + format(result.scale_change) + " > " +
+                    format(params.max_scale_change) + " (the same structure from elsewhere)";
   } else {
     result.reason.clear();
     result.passed = true;

@@ -52,6 +52,8 @@ void GeometricCheckParams::validate() const {
   require(min_features_per_cell >= 1, "geometry.min_features_per_cell must be >= 1");
   require(min_inliers_per_cell >= 1, "geometry.min_inliers_per_cell must be >= 1");
   require(min_coverage >= 0.0 && min_coverage <= 1.0, "geometry.min_coverage must be in [0, 1]");
+  require(std::isfinite(max_scale_change) && max_scale_change >= 1.0,
+          "geometry.max_scale_change must be >= 1");
 }
 
 void PlaceRecognitionParams::validate() const {

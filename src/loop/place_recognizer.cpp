@@ -43,7 +43,8 @@ std::string PlaceQueryResult::describe() const {
     return text + "loop with keyframe " + std::to_string(loop->keyframe_id) + " (score " +
            format("%.3f", loop->score) + ", normalised " + format("%.2f", loop->normalized_score) +
            ", " + std::to_string(loop->geometry.inliers) + " inliers, coverage " +
-           format("%.2f", loop->geometry.coverage) + ", " +
+           format("%.2f", loop->geometry.coverage) + ", scale change " +
+           format("%.2f", loop->geometry.scale_change) + ", " +
            std::to_string(loop->consistent_queries) + " consecutive queries)";
   }
   if (candidates.empty()) {

@@ -61,6 +61,7 @@ TEST(PlaceRecognitionParamsIo, ShippedFileHoldsTheDefaults) {
   EXPECT_EQ(shipped.geometry.min_features_per_cell, d.geometry.min_features_per_cell);
   EXPECT_EQ(shipped.geometry.min_inliers_per_cell, d.geometry.min_inliers_per_cell);
   EXPECT_EQ(shipped.geometry.min_coverage, d.geometry.min_coverage);
+  EXPECT_EQ(shipped.geometry.max_scale_change, d.geometry.max_scale_change);
 }
 
 TEST(PlaceRecognitionParamsIo, KeysOverrideAtTheTopOrUnderASection) {

@@ -132,6 +132,25 @@ TEST_F(AppearanceTest, OverlappingViewsPassWithInliersThatObeyTheTrueHomography)
   EXPECT_GT(correct, 0.95 * result.inliers);
 }
 
+TEST_F(AppearanceTest, ScaleChangeMeasuresTheZoomBetweenViews) {
+  AppearanceExtractor extractor(params_);
+  ViewPose zoomed = at(1000, 450);
+  zoomed.scale = 1.4;  // the same place seen 1.4 times bigger (from closer)
+  const KeyframeAppearance a = extractor.extract(renderView(texture(), at(1000, 450), 11));
+  const KeyframeAppearance b = extractor.extract(renderView(texture(), zoomed, 12));
+  const GeometricCheckResult result =
+      checkGeometry(a, b, matchDescriptors(a, b, geometry_), geometry_);
+  ASSERT_GE(result.inliers, geometry_.min_inliers) << result.reason;
+  EXPECT_NEAR(result.scale_change, 1.4, 0.05);
+  EXPECT_EQ(scaleChange(b, a, {}), 1.0);  // no pair of inliers: no evidence
+  GeometricCheckParams strict = geometry_;
+  strict.max_scale_change = 1.2;
+  strict.min_coverage = 0.0;
+  const GeometricCheckResult refused = checkGeometry(a, b, matchDescriptors(a, b, strict), strict);
+  EXPECT_FALSE(refused.passed);
+  EXPECT_NE(refused.reason.find("scale"), std::string::npos) << refused.reason;
+}
+
 TEST_F(AppearanceTest, UnrelatedViewsFail) {
   AppearanceExtractor extractor(params_);
   const cv::Mat other = makeTexture(1500, 900, 22);

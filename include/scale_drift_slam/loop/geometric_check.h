@@ -27,6 +27,7 @@ struct GeometricCheckResult {
   int inliers = 0;            ///< Matches agreeing with the best model.
   double inlier_ratio = 0.0;  ///< inliers / matches.
   double coverage = 0.0;      ///< Covered grid cells / textured cells, the smaller of both images.
+  double scale_change = 1.0;  ///< Image-space zoom between the inliers of both views (>= 1).
   std::string model;          ///< "homography" or "fundamental": the model reported.
   std::vector<DescriptorMatch> inlier_matches;
   std::string reason;  ///< Why it failed; empty when passed.
@@ -46,7 +47,7 @@ std::vector<DescriptorMatch> matchDescriptors(const KeyframeAppearance& query,
                                               const GeometricCheckParams& params);
 
 /// RANSAC (OpenCV USAC) for a homography and, when that does not pass, a fundamental matrix;
-/// each model must pass the inlier count, inlier ratio and coverage tests of
+/// each model must pass the inlier count, inlier ratio, coverage and scale-change tests of
 /// GeometricCheckParams. RANSAC only runs the iterations needed to find a model that could pass
 /// (its inlier share >= max(min_inlier_ratio, min_inliers / matches)), so hopeless candidates
 /// cost little. Deterministic (fixed RANSAC seed).
@@ -54,6 +55,12 @@ GeometricCheckResult checkGeometry(const KeyframeAppearance& query,
                                    const KeyframeAppearance& candidate,
                                    const std::vector<DescriptorMatch>& matches,
                                    const GeometricCheckParams& params);
+
+/// How much bigger the matched structure looks in one image than in the other (>= 1): the
+/// median over pairs of inliers of the ratio of their pixel distances in the two images. Near 1
+/// when both cameras stood at about the same distance from what they see; 1 with < 2 pairs.
+double scaleChange(const KeyframeAppearance& query, const KeyframeAppearance& candidate,
+                   const std::vector<DescriptorMatch>& inliers);
 
 /// The fraction of an image's textured grid cells (>= min_features_per_cell keypoints) holding
 /// at least min_inliers_per_cell of the `selected` keypoints; 0 when no cell is textured.

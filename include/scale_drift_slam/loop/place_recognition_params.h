@@ -36,7 +36,7 @@ struct VocabularyParams {
 
 /// The check that a candidate shows the same place, not the same texture: descriptor matches
 /// that agree with one epipolar geometry (fundamental matrix, or a homography for planar or
-/// rotation-only views) and cover a large part of both images.
+/// rotation-only views), cover a large part of both images and show it at about the same size.
 struct GeometricCheckParams {
   int max_hamming = 64;              ///< Largest descriptor distance of a match (of 256 bits).
   double ratio = 0.8;                ///< Nearest / second-nearest distance ratio test.
@@ -44,13 +44,16 @@ struct GeometricCheckParams {
   double ransac_threshold_px = 3.0;  ///< Epipolar / transfer error of an inlier.
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 2000;
-  int min_inliers = 40;           ///< Absolute number of geometric inliers.
+  int min_inliers = 60;           ///< Absolute number of geometric inliers.
   double min_inlier_ratio = 0.3;  ///< Inliers / descriptor matches.
   int coverage_cols = 6;          ///< Grid over each image for the coverage test:
   int coverage_rows = 4;
   int min_features_per_cell = 3;  ///< a cell counts when it holds this many keypoints
   int min_inliers_per_cell = 2;   ///< and is covered when it holds this many inliers.
   double min_coverage = 0.5;      ///< Covered / counted cells, the smaller of both images.
+  /// Largest zoom between the views (scaleChange): a camera far from where it stood before sees
+  /// the same distant structure (the end of a corridor), but is not at the same place.
+  double max_scale_change = 1.5;
 
   void validate() const;
 };
