@@ -28,7 +28,8 @@ const char* kUsage =
     "Runs place recognition (loop detection by appearance) on the keyframes of a TUM-layout\n"
     "folder (DATASET/rgb.txt, optional DATASET/groundtruth.txt) and writes\n"
     "DIR/loops.json (accepted loops; with ground truth: camera distance, view angle, true/false)\n"
-    "and DIR/queries.txt (one line per keyframe query: the loop or why there is none).\n"
+    "and DIR/queries.txt (per keyframe query: the loop or why there is none, and every\n"
+    "candidate checked with its geometric figures).\n"
     "Options:\n"
     "  --config FILE            place recognition params (default: config/place_recognition.yaml\n"
     "                           defaults, compiled in)\n"
@@ -173,6 +174,16 @@ int run(const sds::io::CommandLine& cl) {
     extract_ms.push_back(ms(t0, t1));
     query_ms.push_back(ms(t1, t2));
     queries << result.describe() << "\n";
+    for (const sds::loop::LoopCandidate& c : result.candidates) {
+      char line[256];
+      std::snprintf(line, sizeof(line),
+                    "  candidate %u: normalised %.2f, %d matches, %d inliers (%s), coverage %.2f, "
+                    "scale change %.2f, %d consecutive: %s",
+                    c.keyframe_id, c.normalized_score, c.geometry.matches, c.geometry.inliers,
+                    c.geometry.model.empty() ? "-" : c.geometry.model.c_str(), c.geometry.coverage,
+                    c.geometry.scale_change, c.consistent_queries, sds::loop::toString(c.status));
+      queries << line << (c.reason.empty() ? "" : ": " + c.reason) << "\n";
+    }
     const sds::loop::LoopCandidate* loop = result.accepted();
     if (loop == nullptr) continue;
     nlohmann::json entry = {{"query_id", id},

@@ -39,8 +39,8 @@ struct VocabularyParams {
 /// rotation-only views), cover a large part of both images and show it at about the same size.
 struct GeometricCheckParams {
   int max_hamming = 64;              ///< Largest descriptor distance of a match (of 256 bits).
-  double ratio = 0.8;                ///< Nearest / second-nearest distance ratio test.
-  int group_levels_up = 2;           ///< Match within vocabulary nodes this far above words.
+  double ratio = 0.7;                ///< Nearest / second-nearest distance ratio test.
+  int group_levels_up = 3;           ///< Match within vocabulary nodes this far above words.
   double ransac_threshold_px = 3.0;  ///< Epipolar / transfer error of an inlier.
   double ransac_confidence = 0.999;
   int ransac_max_iterations = 2000;
