@@ -1,6 +1,7 @@
 #include "scale_drift_slam/loop/appearance.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -24,7 +25,8 @@ void KeyframeAppearance::validate() const {
          std::to_string(kDescriptorBytes) + " bytes");
   }
   for (const cv::Point2f& p : keypoints) {
-    if (!(p.x >= 0.0f && p.y >= 0.0f && p.x < image_width && p.y < image_height)) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) fail("a keypoint is not finite");
+    if (!undistorted && !(p.x >= 0.0f && p.y >= 0.0f && p.x < image_width && p.y < image_height)) {
       fail("keypoint (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ") outside the image");
     }
   }
@@ -75,7 +77,8 @@ std::vector<cv::KeyPoint> AppearanceExtractor::detectSpread(const cv::Mat& grey)
   return kept;
 }
 
-KeyframeAppearance AppearanceExtractor::extract(const cv::Mat& image) {
+KeyframeAppearance AppearanceExtractor::extract(const cv::Mat& image,
+                                                const geometry::CameraModel* camera) {
   if (image.empty()) throw std::invalid_argument("appearance: empty image");
   if (image.depth() != CV_8U) throw std::invalid_argument("appearance: image must be 8-bit");
   cv::Mat grey;
@@ -93,18 +96,36 @@ KeyframeAppearance AppearanceExtractor::extract(const cv::Mat& image) {
                                 std::to_string(grey.rows) + " too small for the border of " +
                                 std::to_string(params_.border) + " px");
   }
+  if (camera != nullptr && (camera->width() != grey.cols || camera->height() != grey.rows)) {
+    throw std::invalid_argument("appearance: the camera is " + std::to_string(camera->width()) +
+                                "x" + std::to_string(camera->height()) + ", the image " +
+                                std::to_string(grey.cols) + "x" + std::to_string(grey.rows));
+  }
   std::vector<cv::KeyPoint> keypoints = detectSpread(grey);
   KeyframeAppearance appearance;
   appearance.image_width = grey.cols;
   appearance.image_height = grey.rows;
+  appearance.undistorted = camera != nullptr;
   if (keypoints.empty()) return appearance;
   orb_->compute(grey, keypoints, appearance.descriptors);
   appearance.keypoints.reserve(keypoints.size());
   appearance.octaves.reserve(keypoints.size());
-  for (const cv::KeyPoint& keypoint : keypoints) {
-    appearance.keypoints.push_back(keypoint.pt);
-    appearance.octaves.push_back(static_cast<std::uint8_t>(keypoint.octave));
+  cv::Mat kept;
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    cv::Point2f pt = keypoints[i].pt;
+    if (camera != nullptr) {
+      // The ray through the pixel, then the ideal pinhole pixel: (fx x/z + cx, fy y/z + cy).
+      const Eigen::Vector3d ray = camera->unproject(Eigen::Vector2d(pt.x, pt.y));
+      if (ray.z() < 0.2 * ray.norm()) continue;  // beyond ~78 degrees: far off any plane
+      const geometry::CameraCalibration& c = camera->calibration();
+      pt = cv::Point2f(static_cast<float>(c.fx * ray.x() / ray.z() + c.cx),
+                       static_cast<float>(c.fy * ray.y() / ray.z() + c.cy));
+    }
+    appearance.keypoints.push_back(pt);
+    appearance.octaves.push_back(static_cast<std::uint8_t>(keypoints[i].octave));
+    kept.push_back(appearance.descriptors.row(static_cast<int>(i)));
   }
+  appearance.descriptors = kept;
   if (appearance.descriptors.empty()) {
     appearance.keypoints.clear();
     appearance.octaves.clear();

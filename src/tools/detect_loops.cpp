@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/place_recognition_params_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
@@ -34,6 +35,8 @@ const char* kUsage =
     "  --config FILE            place recognition params (default: config/place_recognition.yaml\n"
     "                           defaults, compiled in)\n"
     "  --vocabulary FILE        a vocabulary file (default: learned online from the keyframes)\n"
+    "  --calib FILE             camera calibration; keypoints are undistorted with it (default:\n"
+    "                           DATASET/camera.yaml when present, else raw pixels)\n"
     "  --every N                every N-th frame is a keyframe (default 10)\n"
     "  --keyframe-distance M    instead: a keyframe when the true camera moved M (needs ground\n"
     "                           truth), or turned by --keyframe-angle degrees (default 10)\n"
@@ -128,7 +131,7 @@ double percentile(std::vector<double> values, double p) {
 }
 
 int run(const sds::io::CommandLine& cl) {
-  cl.rejectUnknownFlags({"out", "config", "vocabulary", "every", "keyframe-distance",
+  cl.rejectUnknownFlags({"out", "config", "vocabulary", "calib", "every", "keyframe-distance",
                          "keyframe-angle", "true-distance", "true-angle"});
   const std::string dataset = cl.positional(0, "DATASET");
   const std::string out = cl.required("out");
@@ -148,6 +151,11 @@ int run(const sds::io::CommandLine& cl) {
   const std::vector<std::size_t> keyframes = pickKeyframes(frames, truth, cl);
   std::filesystem::create_directories(out);
 
+  std::unique_ptr<sds::geometry::CameraModel> camera;
+  const std::string calib = cl.text("calib", dataset + "/camera.yaml");
+  if (cl.has("calib") || std::ifstream(calib)) {
+    camera = sds::geometry::makeCameraModel(sds::io::loadCalibrationYaml(calib));
+  }
   sds::loop::PlaceRecognizer recognizer(params);
   sds::loop::AppearanceExtractor extractor(params.appearance);
   std::ofstream queries(out + "/queries.txt");
@@ -164,7 +172,7 @@ int run(const sds::io::CommandLine& cl) {
     const cv::Mat image = cv::imread(frames[k].path, cv::IMREAD_GRAYSCALE);
     if (image.empty()) throw std::runtime_error("cannot read image " + frames[k].path);
     const auto t0 = Clock::now();
-    sds::loop::KeyframeAppearance appearance = extractor.extract(image);
+    sds::loop::KeyframeAppearance appearance = extractor.extract(image, camera.get());
     const auto t1 = Clock::now();
     const auto id = static_cast<sds::map::KeyframeId>(k);
     const sds::loop::PlaceQueryResult result =
@@ -221,6 +229,7 @@ int run(const sds::io::CommandLine& cl) {
       {"loops_true", true_loops},
       {"loops_false", false_loops},
       {"ground_truth", !truth.empty()},
+      {"undistorted", camera != nullptr},
       {"extract_ms_median", percentile(extract_ms, 0.5)},
       {"query_ms_median", percentile(query_ms, 0.5)},
       {"query_ms_p95", percentile(query_ms, 0.95)},

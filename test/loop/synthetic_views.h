@@ -115,6 +115,29 @@ inline cv::Mat renderView(const cv::Mat& texture, const ViewPose& pose, std::uin
   return view;
 }
 
+/// The same view through a lens: pixel d of the result shows what the ideal pinhole camera with
+/// the lens' fx, fy, cx, cy shows at the pixel its ray meets. `unproject` maps a pixel to its ray.
+template <typename Unproject>
+cv::Mat renderThroughLens(const cv::Mat& texture, const ViewPose& pose, double fx, double fy,
+                          double cx, double cy, const Unproject& unproject,
+                          cv::Size size = cv::Size(640, 480)) {
+  const cv::Matx33d H = viewToTexture(pose, size);
+  cv::Mat map_x(size, CV_32F);
+  cv::Mat map_y(size, CV_32F);
+  for (int v = 0; v < size.height; ++v) {
+    for (int u = 0; u < size.width; ++u) {
+      const auto ray = unproject(u, v);
+      const cv::Vec3d pinhole(fx * ray[0] / ray[2] + cx, fy * ray[1] / ray[2] + cy, 1.0);
+      const cv::Vec3d t = H * pinhole;
+      map_x.at<float>(v, u) = static_cast<float>(t[0] / t[2]);
+      map_y.at<float>(v, u) = static_cast<float>(t[1] / t[2]);
+    }
+  }
+  cv::Mat view;
+  cv::remap(texture, view, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return view;
+}
+
 /// Pastes `patch` into `image` with its top-left corner at `corner` (the "same poster in two
 /// places" of the repeated-texture tests).
 inline void pastePoster(cv::Mat& image, const cv::Mat& patch, cv::Point corner) {
@@ -129,8 +152,8 @@ struct SyntheticKeyframe {
 
 /// A sideways walk along a wall: views centred at x = x_begin, x_begin + step, ... < x_end, all
 /// with `base`'s other settings.
-inline std::vector<SyntheticKeyframe> walkAlong(int wall, double x_begin, double x_end,
-                                                double step, ViewPose base) {
+inline std::vector<SyntheticKeyframe> walkAlong(int wall, double x_begin, double x_end, double step,
+                                                ViewPose base) {
   std::vector<SyntheticKeyframe> walk;
   for (double x = x_begin; x < x_end; x += step) {
     base.x = x;

@@ -151,6 +151,59 @@ TEST_F(AppearanceTest, ScaleChangeMeasuresTheZoomBetweenViews) {
   EXPECT_NE(refused.reason.find("scale"), std::string::npos) << refused.reason;
 }
 
+TEST_F(AppearanceTest, UndistortedKeypointsRestoreTheTwoViewGeometryOfADistortedLens) {
+  geometry::CameraCalibration calibration;
+  calibration.fx = calibration.fy = 320.0;
+  calibration.cx = 320.0;
+  calibration.cy = 240.0;
+  calibration.width = 640;
+  calibration.height = 480;
+  calibration.distortion = {-0.35, 0.12, 0.0, 0.0};  // strong barrel distortion
+  const auto camera = geometry::makeCameraModel(calibration);
+  const auto unproject = [&](int u, int v) {
+    const Eigen::Vector3d ray = camera->unproject(Eigen::Vector2d(u, v));
+    return cv::Vec3d(ray.x(), ray.y(), ray.z());
+  };
+  ViewPose second = at(1130, 450);
+  second.angle_deg = 5.0;
+  const cv::Mat image_a =
+      testing::renderThroughLens(texture(), at(1000, 450), 320, 320, 320, 240, unproject);
+  const cv::Mat image_b =
+      testing::renderThroughLens(texture(), second, 320, 320, 320, 240, unproject);
+  AppearanceExtractor extractor(params_);
+  const auto check = [&](const geometry::CameraModel* lens) {
+    const KeyframeAppearance a = extractor.extract(image_a, lens);
+    const KeyframeAppearance b = extractor.extract(image_b, lens);
+    EXPECT_EQ(a.undistorted, lens != nullptr);
+    EXPECT_NO_THROW(a.validate());
+    return checkGeometry(a, b, matchDescriptors(a, b, geometry_), geometry_);
+  };
+  const GeometricCheckResult raw = check(nullptr);
+  const GeometricCheckResult undistorted = check(camera.get());
+  EXPECT_TRUE(undistorted.passed) << undistorted.reason;
+  // The texture is a plane: through the ideal pinhole the views differ by a homography.
+  EXPECT_EQ(undistorted.model, "homography");
+  EXPECT_GT(undistorted.inliers, raw.inliers);
+
+  // Each undistorted keypoint maps back, through the lens, onto the pixel it was found at.
+  const KeyframeAppearance distorted = extractor.extract(image_a);
+  const KeyframeAppearance ideal = extractor.extract(image_a, camera.get());
+  ASSERT_EQ(distorted.size(), ideal.size());  // none beyond 78 degrees with this lens
+  for (std::size_t i = 0; i < ideal.size(); i += 50) {
+    const Eigen::Vector3d ray((ideal.keypoints[i].x - 320.0) / 320.0,
+                              (ideal.keypoints[i].y - 240.0) / 320.0, 1.0);
+    const auto pixel = camera->project(ray);
+    ASSERT_TRUE(pixel.has_value());
+    EXPECT_NEAR(pixel->x(), distorted.keypoints[i].x, 0.05);
+    EXPECT_NEAR(pixel->y(), distorted.keypoints[i].y, 0.05);
+  }
+  geometry::CameraCalibration other = calibration;
+  other.width = 320;
+  other.cx = 160.0;
+  EXPECT_THROW(extractor.extract(image_a, geometry::makeCameraModel(other).get()),
+               std::invalid_argument);
+}
+
 TEST_F(AppearanceTest, UnrelatedViewsFail) {
   AppearanceExtractor extractor(params_);
   const cv::Mat other = makeTexture(1500, 900, 22);

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/loop/place_recognition_params.h"
 
 namespace scale_drift_slam::loop {
@@ -18,17 +19,22 @@ namespace scale_drift_slam::loop {
 constexpr int kDescriptorBytes = 32;
 
 /// Keypoints and descriptors of one keyframe image. Row i of `descriptors` (CV_8UC1,
-/// n x kDescriptorBytes) describes keypoint i. Pixel coordinates of the image it was computed on.
+/// n x kDescriptorBytes) describes keypoint i. Keypoints are pixels of the image it was computed
+/// on or, when `undistorted`, pixels of the ideal pinhole camera with the same fx, fy, cx, cy
+/// (lens distortion removed, so that the two-view geometry of the geometric check holds; they may
+/// then lie a little outside the image).
 struct KeyframeAppearance {
   int image_width = 0;
   int image_height = 0;
+  bool undistorted = false;
   std::vector<cv::Point2f> keypoints;
   std::vector<std::uint8_t> octaves;  ///< ORB pyramid level of each keypoint.
   cv::Mat descriptors;
 
   std::size_t size() const { return keypoints.size(); }
   /// Throws std::invalid_argument when the parts disagree (sizes, descriptor type or width, a
-  /// keypoint outside the image, a non-positive image size).
+  /// non-finite keypoint, a keypoint outside the image unless undistorted, a non-positive image
+  /// size).
   void validate() const;
   /// The descriptor of keypoint i as kDescriptorBytes bytes.
   const std::uint8_t* descriptor(std::size_t i) const { return descriptors.ptr<std::uint8_t>(i); }
@@ -43,8 +49,10 @@ class AppearanceExtractor {
 
   /// Detects up to max_features ORB keypoints spread over the grid and describes them. Accepts
   /// CV_8UC1 (or CV_8UC3 / CV_8UC4, converted to grey). Throws std::invalid_argument for an
-  /// empty image, another depth, or an image too small for the ORB border.
-  KeyframeAppearance extract(const cv::Mat& image);
+  /// empty image, another depth, or an image too small for the ORB border. With a camera,
+  /// keypoints are undistorted (KeyframeAppearance::undistorted) and those more than 78 degrees
+  /// off the optical axis dropped; the camera's image size must equal the image's.
+  KeyframeAppearance extract(const cv::Mat& image, const geometry::CameraModel* camera = nullptr);
 
   const AppearanceParams& params() const { return params_; }
 
