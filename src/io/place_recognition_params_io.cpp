@@ -29,11 +29,12 @@ void apply(const YAML::Node& section, const std::string& prefix,
   for (const auto& entry : section) {
     const std::string key = entry.first.as<std::string>();
     const auto setter = setters.find(key);
-    if (setter == setters.end()) fail(origin, "unknown key '" + prefix + key + "'");
+    const std::string name = prefix + key;
+    if (setter == setters.end()) fail(origin, "unknown key '" + name + "'");
     try {
       setter->second(entry.second);
     } catch (const YAML::Exception&) {
-      fail(origin, "key '" + prefix + key + "' does not hold the expected kind of value");
+      fail(origin, "key '" + name + "' does not hold the expected kind of value");
     }
   }
 }

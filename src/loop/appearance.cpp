@@ -56,7 +56,7 @@ std::vector<cv::KeyPoint> AppearanceExtractor::detectSpread(const cv::Mat& grey)
   for (int i = 0; i < static_cast<int>(detected.size()); ++i) {
     const int cx = std::clamp(static_cast<int>(detected[i].pt.x * cols / grey.cols), 0, cols - 1);
     const int cy = std::clamp(static_cast<int>(detected[i].pt.y * rows / grey.rows), 0, rows - 1);
-    cells[static_cast<std::size_t>(cy * cols + cx)].push_back(i);
+    cells[static_cast<std::size_t>(cy) * cols + cx].push_back(i);
   }
   for (std::vector<int>& cell : cells) {
     std::stable_sort(cell.begin(), cell.end(),

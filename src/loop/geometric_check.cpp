@@ -125,7 +125,7 @@ double gridCoverage(const KeyframeAppearance& appearance, const std::vector<int>
   const auto cell = [&](const cv::Point2f& p) {
     const int cx = std::clamp(static_cast<int>(p.x * cols / appearance.image_width), 0, cols - 1);
     const int cy = std::clamp(static_cast<int>(p.y * rows / appearance.image_height), 0, rows - 1);
-    return static_cast<std::size_t>(cy * cols + cx);
+    return static_cast<std::size_t>(cy) * cols + cx;
   };
   std::vector<int> features(static_cast<std::size_t>(cols * rows), 0);
   std::vector<int> hits(features.size(), 0);

@@ -123,7 +123,7 @@ class VocabularyBuilder {
   }
 
   Descriptor majority(const std::vector<int>& cluster) const {
-    std::array<int, 8 * kDescriptorBytes> ones{};
+    std::array<int, std::size_t{8} * kDescriptorBytes> ones{};
     for (int member : cluster) {
       const std::uint8_t* d = row(member);
       for (int b = 0; b < kDescriptorBytes; ++b) {

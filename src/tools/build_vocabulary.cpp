@@ -42,7 +42,11 @@ std::vector<std::string> imagesOf(const std::string& folder) {
       std::istringstream fields(line);
       double timestamp = 0.0;
       std::string path;
-      if (fields >> timestamp >> path) paths.push_back(folder + "/" + path);
+      if (!(fields >> timestamp >> path)) continue;
+      std::string full = folder;
+      full += '/';
+      full += path;
+      paths.push_back(std::move(full));
     }
   } else {
     if (!fs::is_directory(folder)) throw std::runtime_error(folder + " is not a folder");

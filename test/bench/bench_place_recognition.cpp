@@ -47,7 +47,9 @@ void compareDescriptors(sds::bench::Report& report) {
       {"ORB", cv::ORB::create(1000)},
       {"BRISK", cv::BRISK::create()},
       {"AKAZE", cv::AKAZE::create()}};
-  for (const auto& [name, detector] : detectors) {
+  for (const auto& named : detectors) {
+    const std::string& name = named.first;
+    const cv::Ptr<cv::Feature2D>& detector = named.second;
     std::vector<cv::KeyPoint> keypoints_a;
     std::vector<cv::KeyPoint> keypoints_b;
     cv::Mat descriptors_a;
@@ -81,7 +83,9 @@ void compareDescriptors(sds::bench::Report& report) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   cv::setNumThreads(1);
   sds::bench::Report report("place_recognition", argc, argv);
   compareDescriptors(report);
@@ -103,6 +107,7 @@ int main(int argc, char** argv) {
                 [&] { extractor.extract(image); });
 
   std::vector<cv::Mat> training;
+  training.reserve(static_cast<std::size_t>(params.online_training_keyframes));
   for (int k = 0; k < params.online_training_keyframes; ++k) {
     training.push_back(appearances[static_cast<std::size_t>(k)].descriptors);
   }
@@ -181,4 +186,15 @@ int main(int argc, char** argv) {
                              params.geometry);
   });
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_place_recognition: %s\n", e.what());
+    return 1;
+  }
 }

@@ -49,9 +49,9 @@ TEST_F(AppearanceTest, BoundedCountSpreadOverTheImage) {
   // than 3x its fair share.
   std::vector<int> per_cell(static_cast<std::size_t>(params_.grid_cols * params_.grid_rows), 0);
   for (const cv::Point2f& p : appearance.keypoints) {
-    ++per_cell[static_cast<std::size_t>(static_cast<int>(p.y * params_.grid_rows / 480) *
-                                            params_.grid_cols +
-                                        static_cast<int>(p.x * params_.grid_cols / 640))];
+    const auto row = static_cast<std::size_t>(p.y * params_.grid_rows / 480);
+    const auto col = static_cast<std::size_t>(p.x * params_.grid_cols / 640);
+    ++per_cell[row * params_.grid_cols + col];
   }
   const double fair = static_cast<double>(appearance.size()) / per_cell.size();
   int empty = 0;

@@ -119,6 +119,7 @@ TEST(Vocabulary, IdfIsLogOfImagesOverImagesHoldingTheWord) {
 TEST(Vocabulary, TrainingIsDeterministicAndSaveLoadRoundTrips) {
   std::mt19937 rng(7);
   std::vector<cv::Mat> images;
+  images.reserve(6);
   for (int i = 0; i < 6; ++i)
     images.push_back(randomDescriptors(300, rng));
   VocabularyParams params;
@@ -185,6 +186,7 @@ TEST(Vocabulary, RejectsBadInput) {
 TEST(BowDatabase, ScoresEqualOneMinusHalfTheL1Distance) {
   std::mt19937 rng(11);
   std::vector<cv::Mat> images;
+  images.reserve(8);
   for (int i = 0; i < 8; ++i)
     images.push_back(randomDescriptors(200, rng));
   VocabularyParams params;
