@@ -1,0 +1,148 @@
+#pragma once
+// Place recognition by appearance (paper/ALGORITHM.md, "Loop closure detection"): a bag of
+// binary words over the keyframes' ORB descriptors, an inverted index with tf-idf L1 scores
+// normalised by the score against the previous keyframe, islands of neighbouring keyframes,
+// a geometric check against repeated texture, and consistency over consecutive queries
+// (doc/place_recognition.md). Loop verification (loop constraint, Sim(3)) comes after it.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "scale_drift_slam/loop/appearance.h"
+#include "scale_drift_slam/loop/bow_database.h"
+#include "scale_drift_slam/loop/geometric_check.h"
+#include "scale_drift_slam/loop/place_recognition_params.h"
+#include "scale_drift_slam/loop/vocabulary.h"
+#include "scale_drift_slam/map/map.h"
+
+namespace scale_drift_slam::loop {
+
+enum class CandidateStatus {
+  kAccepted,          ///< Verified and consistent: a loop to verify metrically.
+  kFailedGeometry,    ///< The geometric check failed (see geometry.reason).
+  kNotYetConsistent,  ///< Verified, but not yet over min_consistent_queries queries.
+  kContinuesLoop,     ///< Verified, but only continues a loop already accepted.
+};
+const char* toString(CandidateStatus status);
+
+/// The best keyframe of one island of neighbouring candidates, and what became of it.
+struct LoopCandidate {
+  map::KeyframeId keyframe_id = 0;
+  double score = 0.0;             ///< L1 bag-of-words score against the query, in [0, 1].
+  double normalized_score = 0.0;  ///< score / the query's score against the previous keyframe.
+  map::KeyframeId island_first_id = 0;
+  map::KeyframeId island_last_id = 0;
+  double island_score = 0.0;  ///< Sum of the island members' scores.
+  GeometricCheckResult geometry;
+  int consistent_queries = 0;  ///< Consecutive queries (this one included) verified nearby.
+  CandidateStatus status = CandidateStatus::kFailedGeometry;
+  std::string reason;  ///< Why it was not accepted; empty when accepted.
+};
+
+/// The answer to one query, with enough detail to log why nothing was accepted.
+struct PlaceQueryResult {
+  map::KeyframeId query_id = 0;
+  bool searched = false;  ///< False when the query was skipped (skip_reason).
+  std::string skip_reason;
+  double reference_score = 0.0;  ///< Score of the query against the previous keyframe.
+  int keyframes_considered = 0;  ///< Database keyframes outside the exclusions.
+  int keyframes_above_threshold = 0;
+  std::vector<LoopCandidate> candidates;  ///< Checked islands, best island first.
+
+  /// The accepted candidate, if any (at most one per query).
+  const LoopCandidate* accepted() const;
+  /// One line for logs: the accepted loop or why there is none.
+  std::string describe() const;
+};
+
+/// Finds earlier keyframes that show the place a new keyframe shows. Feed keyframes in order:
+/// query(k) then add(k) (or queryAndAdd). Runs in the loop-closure thread; not thread-safe. Owns
+/// the appearances of all keyframes added (about 41 kB each with 1000 keypoints) and shares the
+/// vocabulary read-only.
+class PlaceRecognizer {
+ public:
+  /// With a vocabulary (loaded from params.vocabulary_file or given), it is used as is; without,
+  /// one is learned from the first params.online_training_keyframes keyframes. Throws
+  /// std::invalid_argument on invalid params, std::runtime_error on an unreadable file.
+  explicit PlaceRecognizer(PlaceRecognitionParams params,
+                           std::shared_ptr<const Vocabulary> vocabulary = nullptr);
+
+  /// Searches the database for the place `appearance` shows and updates the consistency
+  /// bookkeeping (so call it once per keyframe, in order). `excluded` keyframes (for example
+  /// those covisible with the query) are not proposed. Throws std::invalid_argument on an
+  /// invalid appearance.
+  PlaceQueryResult query(map::KeyframeId id, double timestamp, const KeyframeAppearance& appearance,
+                         const std::unordered_set<map::KeyframeId>& excluded = {});
+  /// Adds a keyframe to the database. Throws std::invalid_argument on a repeated id or an
+  /// invalid appearance.
+  void add(map::KeyframeId id, double timestamp, KeyframeAppearance appearance);
+  /// query() then add().
+  PlaceQueryResult queryAndAdd(map::KeyframeId id, double timestamp, KeyframeAppearance appearance,
+                               const std::unordered_set<map::KeyframeId>& excluded = {});
+
+  /// Tells that the loop accepted at `query_id` failed metric verification: it no longer
+  /// suppresses later candidates as its continuation.
+  void reportLoopRejected(map::KeyframeId query_id);
+
+  bool vocabularyReady() const { return vocabulary_ != nullptr; }
+  std::shared_ptr<const Vocabulary> vocabulary() const { return vocabulary_; }
+  std::size_t size() const { return keyframes_.size(); }
+  bool contains(map::KeyframeId id) const { return index_of_.count(id) != 0; }
+  /// The stored appearance of a keyframe (loop verification matches against it). Throws
+  /// std::out_of_range for an unknown id.
+  const KeyframeAppearance& appearance(map::KeyframeId id) const;
+  const PlaceRecognitionParams& params() const { return params_; }
+
+ private:
+  struct Stored {
+    map::KeyframeId id = 0;
+    double timestamp = 0.0;
+    KeyframeAppearance appearance;
+    FeatureGroups groups;
+  };
+  struct Island {
+    std::size_t first = 0;
+    std::size_t last = 0;
+    std::size_t best = 0;
+    double score = 0.0;  ///< Sum of the members' scores.
+    double best_score = 0.0;
+  };
+  /// Candidates of earlier queries verified near [first, last] (document indices).
+  struct ConsistencyGroup {
+    std::size_t first = 0;
+    std::size_t last = 0;
+    int count = 0;
+  };
+  struct AcceptedLoop {
+    map::KeyframeId accepted_query_id = 0;
+    std::size_t last_query = 0;      ///< Document index the query had (or would have).
+    std::size_t last_candidate = 0;  ///< Document index of the matched keyframe.
+  };
+
+  void trainOnlineVocabulary();
+  void index(std::size_t position);
+  std::vector<Island> findIslands(const std::vector<float>& scores, double reference,
+                                  std::size_t limit, double timestamp,
+                                  const std::unordered_set<map::KeyframeId>& excluded,
+                                  PlaceQueryResult& result) const;
+  LoopCandidate checkIsland(const Island& island, double reference,
+                            const KeyframeAppearance& appearance,
+                            const FeatureGroups& groups) const;
+  void decide(std::size_t query_position, map::KeyframeId query_id,
+              const std::vector<Island>& checked, PlaceQueryResult& result);
+
+  PlaceRecognitionParams params_;
+  std::shared_ptr<const Vocabulary> vocabulary_;
+  std::vector<Stored> keyframes_;  ///< In insertion order = document order once indexed.
+  std::unordered_map<map::KeyframeId, std::size_t> index_of_;
+  BowDatabase database_;
+  std::vector<ConsistencyGroup> groups_;
+  std::optional<std::size_t> groups_query_;  ///< Query position groups_ belong to.
+  std::vector<AcceptedLoop> loops_;
+};
+
+}  // namespace scale_drift_slam::loop

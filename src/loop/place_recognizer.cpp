@@ -1,0 +1,282 @@
+#include "scale_drift_slam/loop/place_recognizer.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+
+namespace scale_drift_slam::loop {
+namespace {
+
+std::string format(const char* pattern, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), pattern, value);
+  return buffer;
+}
+
+}  // namespace
+
+const char* toString(CandidateStatus status) {
+  switch (status) {
+    case CandidateStatus::kAccepted:
+      return "accepted";
+    case CandidateStatus::kFailedGeometry:
+      return "failed geometry";
+    case CandidateStatus::kNotYetConsistent:
+      return "not yet consistent";
+    case CandidateStatus::kContinuesLoop:
+      return "continues an accepted loop";
+  }
+  return "unknown";
+}
+
+const LoopCandidate* PlaceQueryResult::accepted() const {
+  for (const LoopCandidate& candidate : candidates) {
+    if (candidate.status == CandidateStatus::kAccepted) return &candidate;
+  }
+  return nullptr;
+}
+
+std::string PlaceQueryResult::describe() const {
+  std::string text = "query " + std::to_string(query_id) + ": ";
+  if (!searched) return text + "skipped (" + skip_reason + ")";
+  if (const LoopCandidate* loop = accepted()) {
+    return text + "loop with keyframe " + std::to_string(loop->keyframe_id) + " (score " +
+           format("%.3f", loop->score) + ", normalised " + format("%.2f", loop->normalized_score) +
+           ", " + std::to_string(loop->geometry.inliers) + " inliers, coverage " +
+           format("%.2f", loop->geometry.coverage) + ", scale change " +
+           format("%.2f", loop->geometry.scale_change) + ", " +
+           std::to_string(loop->consistent_queries) + " consecutive queries)";
+  }
+  if (candidates.empty()) {
+    return text + "no candidate above the normalised score (" +
+           std::to_string(keyframes_considered) + " keyframes considered, reference score " +
+           format("%.3f", reference_score) + ")";
+  }
+  const LoopCandidate& best = candidates.front();
+  return text + "no loop; best candidate " + std::to_string(best.keyframe_id) + " (normalised " +
+         format("%.2f", best.normalized_score) + "): " + toString(best.status) + ": " + best.reason;
+}
+
+PlaceRecognizer::PlaceRecognizer(PlaceRecognitionParams params,
+                                 std::shared_ptr<const Vocabulary> vocabulary)
+    : params_(std::move(params)), vocabulary_(std::move(vocabulary)) {
+  params_.validate();
+  if (!vocabulary_ && !params_.vocabulary_file.empty()) {
+    vocabulary_ = std::make_shared<const Vocabulary>(Vocabulary::load(params_.vocabulary_file));
+  }
+  if (vocabulary_ && vocabulary_->empty()) {
+    throw std::invalid_argument("place recognizer: the given vocabulary is empty");
+  }
+}
+
+const KeyframeAppearance& PlaceRecognizer::appearance(map::KeyframeId id) const {
+  const auto it = index_of_.find(id);
+  if (it == index_of_.end()) {
+    throw std::out_of_range("place recognizer: unknown keyframe " + std::to_string(id));
+  }
+  return keyframes_[it->second].appearance;
+}
+
+void PlaceRecognizer::add(map::KeyframeId id, double timestamp, KeyframeAppearance appearance) {
+  if (contains(id)) {
+    throw std::invalid_argument("place recognizer: keyframe " + std::to_string(id) +
+                                " was already added");
+  }
+  appearance.validate();
+  index_of_[id] = keyframes_.size();
+  keyframes_.push_back(Stored{id, timestamp, std::move(appearance), {}});
+  if (vocabulary_) {
+    index(keyframes_.size() - 1);
+  } else if (static_cast<int>(keyframes_.size()) >= params_.online_training_keyframes) {
+    trainOnlineVocabulary();
+  }
+}
+
+PlaceQueryResult PlaceRecognizer::queryAndAdd(map::KeyframeId id, double timestamp,
+                                              KeyframeAppearance appearance,
+                                              const std::unordered_set<map::KeyframeId>& excluded) {
+  PlaceQueryResult result = query(id, timestamp, appearance, excluded);
+  add(id, timestamp, std::move(appearance));
+  return result;
+}
+
+void PlaceRecognizer::reportLoopRejected(map::KeyframeId query_id) {
+  loops_.erase(
+      std::remove_if(loops_.begin(), loops_.end(),
+                     [&](const AcceptedLoop& loop) { return loop.accepted_query_id == query_id; }),
+      loops_.end());
+}
+
+void PlaceRecognizer::trainOnlineVocabulary() {
+  std::vector<cv::Mat> descriptors;
+  for (const Stored& stored : keyframes_)
+    descriptors.push_back(stored.appearance.descriptors);
+  bool any = false;
+  for (const cv::Mat& d : descriptors)
+    any |= !d.empty();
+  if (!any) return;  // nothing to learn from yet (textureless images): try at the next keyframe
+  vocabulary_ =
+      std::make_shared<const Vocabulary>(Vocabulary::train(descriptors, params_.vocabulary));
+  for (std::size_t i = 0; i < keyframes_.size(); ++i)
+    index(i);
+}
+
+void PlaceRecognizer::index(std::size_t position) {
+  Stored& stored = keyframes_[position];
+  const BowVector bow = vocabulary_->transform(stored.appearance.descriptors, stored.groups,
+                                               params_.geometry.group_levels_up);
+  database_.add(bow);
+}
+
+PlaceQueryResult PlaceRecognizer::query(map::KeyframeId id, double timestamp,
+                                        const KeyframeAppearance& appearance,
+                                        const std::unordered_set<map::KeyframeId>& excluded) {
+  PlaceQueryResult result;
+  result.query_id = id;
+  if (!vocabularyReady()) {
+    result.skip_reason = "vocabulary not learned yet (" + std::to_string(keyframes_.size()) +
+                         " of " + std::to_string(params_.online_training_keyframes) + " keyframes)";
+    return result;
+  }
+  appearance.validate();
+  const auto known = index_of_.find(id);
+  const std::size_t position = known != index_of_.end() ? known->second : keyframes_.size();
+  if (position == 0) {
+    result.skip_reason = "no previous keyframe";
+    return result;
+  }
+  FeatureGroups groups;
+  const BowVector bow =
+      vocabulary_->transform(appearance.descriptors, groups, params_.geometry.group_levels_up);
+  result.reference_score = BowDatabase::score(bow, database_.document(position - 1));
+  if (result.reference_score < params_.min_reference_score) {
+    result.skip_reason = "score against the previous keyframe " +
+                         format("%.4f", result.reference_score) + " below " +
+                         format("%.4f", params_.min_reference_score);
+    return result;
+  }
+  const auto recent = static_cast<std::size_t>(params_.recent_keyframes_excluded);
+  const std::size_t limit = position > recent ? position - recent : 0;
+  result.searched = true;
+  std::vector<float> scores;
+  database_.scoreAll(bow, scores);
+  std::vector<Island> islands =
+      findIslands(scores, result.reference_score, limit, timestamp, excluded, result);
+  if (islands.size() > static_cast<std::size_t>(params_.max_islands_checked)) {
+    islands.resize(static_cast<std::size_t>(params_.max_islands_checked));
+  }
+  for (const Island& island : islands) {
+    result.candidates.push_back(checkIsland(island, result.reference_score, appearance, groups));
+  }
+  decide(position, id, islands, result);
+  return result;
+}
+
+std::vector<PlaceRecognizer::Island> PlaceRecognizer::findIslands(
+    const std::vector<float>& scores, double reference, std::size_t limit, double timestamp,
+    const std::unordered_set<map::KeyframeId>& excluded, PlaceQueryResult& result) const {
+  std::vector<Island> islands;
+  for (std::size_t i = 0; i < limit; ++i) {
+    const Stored& stored = keyframes_[i];
+    if (params_.recent_seconds_excluded > 0.0 &&
+        stored.timestamp > timestamp - params_.recent_seconds_excluded) {
+      continue;
+    }
+    if (excluded.count(stored.id) != 0) continue;
+    ++result.keyframes_considered;
+    if (scores[i] / reference < params_.min_normalized_score) continue;
+    ++result.keyframes_above_threshold;
+    // Join the last island when within island_gap documents of its end (DLoopDetector).
+    if (!islands.empty() &&
+        i - islands.back().last <= static_cast<std::size_t>(params_.island_gap)) {
+      Island& island = islands.back();
+      island.last = i;
+      island.score += scores[i];
+      if (scores[i] > island.best_score) {
+        island.best = i;
+        island.best_score = scores[i];
+      }
+    } else {
+      islands.push_back(Island{i, i, i, scores[i], scores[i]});
+    }
+  }
+  std::stable_sort(islands.begin(), islands.end(),
+                   [](const Island& a, const Island& b) { return a.score > b.score; });
+  return islands;
+}
+
+LoopCandidate PlaceRecognizer::checkIsland(const Island& island, double reference,
+                                           const KeyframeAppearance& appearance,
+                                           const FeatureGroups& groups) const {
+  const Stored& best = keyframes_[island.best];
+  LoopCandidate candidate;
+  candidate.keyframe_id = best.id;
+  candidate.score = island.best_score;
+  candidate.normalized_score = island.best_score / reference;
+  candidate.island_first_id = keyframes_[island.first].id;
+  candidate.island_last_id = keyframes_[island.last].id;
+  candidate.island_score = island.score;
+  const std::vector<DescriptorMatch> matches =
+      matchDescriptors(appearance, groups, best.appearance, best.groups, params_.geometry);
+  candidate.geometry = checkGeometry(appearance, best.appearance, matches, params_.geometry);
+  if (!candidate.geometry.passed) {
+    candidate.status = CandidateStatus::kFailedGeometry;
+    candidate.reason = candidate.geometry.reason;
+  }
+  return candidate;
+}
+
+void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_id,
+                             const std::vector<Island>& checked, PlaceQueryResult& result) {
+  const bool consecutive = groups_query_.has_value() && *groups_query_ + 1 == query_position;
+  const auto gap = static_cast<std::size_t>(params_.consistency_gap);
+  const auto near = [](std::size_t first, std::size_t last, std::size_t other_first,
+                       std::size_t other_last, std::size_t margin) {
+    return first <= other_last + margin && other_first <= last + margin;
+  };
+  std::vector<ConsistencyGroup> groups;
+  bool accepted = false;
+  for (std::size_t k = 0; k < checked.size(); ++k) {
+    const Island& island = checked[k];
+    LoopCandidate& candidate = result.candidates[k];
+    if (!candidate.geometry.passed) continue;
+    int count = 1;
+    if (consecutive) {
+      for (const ConsistencyGroup& group : groups_) {
+        if (near(island.first, island.last, group.first, group.last, gap)) {
+          count = std::max(count, group.count + 1);
+        }
+      }
+    }
+    groups.push_back(ConsistencyGroup{island.first, island.last, count});
+    candidate.consistent_queries = count;
+
+    const auto continued = std::find_if(loops_.begin(), loops_.end(), [&](const AcceptedLoop& l) {
+      const auto loop_gap = static_cast<std::size_t>(params_.continuation_gap);
+      return query_position <= l.last_query + loop_gap &&
+             near(island.first, island.last, l.last_candidate, l.last_candidate, loop_gap);
+    });
+    if (params_.suppress_loop_continuation && continued != loops_.end()) {
+      candidate.status = CandidateStatus::kContinuesLoop;
+      candidate.reason =
+          "continues the loop accepted at query " + std::to_string(continued->accepted_query_id);
+      continued->last_query = query_position;
+      continued->last_candidate = island.best;
+    } else if (count < params_.min_consistent_queries) {
+      candidate.status = CandidateStatus::kNotYetConsistent;
+      candidate.reason = "verified in " + std::to_string(count) + " of " +
+                         std::to_string(params_.min_consistent_queries) + " consecutive queries";
+    } else if (accepted) {
+      candidate.status = CandidateStatus::kNotYetConsistent;
+      candidate.reason = "a better island was accepted by this query";
+    } else {
+      candidate.status = CandidateStatus::kAccepted;
+      accepted = true;
+      loops_.push_back(AcceptedLoop{query_id, query_position, island.best});
+    }
+  }
+  groups_ = std::move(groups);
+  groups_query_ = query_position;
+}
+
+}  // namespace scale_drift_slam::loop
