@@ -8,6 +8,9 @@ SDS_JOBS="${SDS_JOBS:-2}"
 
 # A pyenv python3 first on PATH has no ROS modules (doc/install.md): use Debian's.
 export PATH="/usr/bin:/bin:$PATH"
+# When ccache is installed (optional, not in the package list) it is used; paths are hashed
+# relative to the checkout so that several checkouts share the cache.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$SDS_ROOT}"
 
 sds_log() { printf '\033[1m[scale_drift_slam]\033[0m %s\n' "$*"; }
 
@@ -47,7 +50,9 @@ sds_build() {
   if [[ ! -f "$SDS_BUILD_DIR/CMakeCache.txt" ]]; then
     sds_log "configuring in $SDS_BUILD_DIR"
     mkdir -p "$SDS_BUILD_DIR"
-    cmake -S "$SDS_ROOT" -B "$SDS_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release \
+    local launcher=()
+    command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+    cmake -S "$SDS_ROOT" -B "$SDS_BUILD_DIR" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
       -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
       -DCATKIN_ENABLE_TESTING=ON > "$SDS_BUILD_DIR/configure.log" 2>&1 ||
       { cat "$SDS_BUILD_DIR/configure.log"; return 1; }
