@@ -34,7 +34,6 @@ std::vector<Field> fieldsOf(SlamParams& p) {
       {"tracker", "min_inliers", &t.min_inliers},
       {"tracker", "local_recent_keyframes", &t.local_recent_keyframes},
       {"tracker", "local_nearest_keyframes", &t.local_nearest_keyframes},
-      {"tracker", "keyframe_corners", &t.keyframe_corners},
       {"tracker", "retire_after_searches", &t.retire_after_searches},
       {"tracker", "retire_found_ratio", &t.retire_found_ratio},
       {"features", "fast_threshold", &t.features.fast_threshold},

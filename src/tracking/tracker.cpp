@@ -50,7 +50,6 @@ void TrackerParams::validate() const {
         "tracker.local_recent_keyframes must be >= 1, "
         "local_nearest_keyframes >= 0");
   }
-  if (keyframe_corners < 0) throw std::invalid_argument("tracker.keyframe_corners must be >= 0");
   if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
     throw std::invalid_argument(
         "tracker: need retire_after_searches >= 1 and retire_found_ratio in [0, 1]");
@@ -143,10 +142,7 @@ map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3
   message.keyframe.timestamp = timestamp;
   message.keyframe.T_kf_world = T_kf_world;
   message.image = image.base().clone();
-  for (const cv::KeyPoint& corner :
-       detectSpreadCorners(image.base(), params_.keyframe_corners, params_.features)) {
-    message.corners_px.emplace_back(corner.pt.x, corner.pt.y);
-  }
+  message.map_version = map_.version();
   return message;
 }
 

@@ -40,9 +40,13 @@ struct KeyframeMessage {
   std::vector<NewMapPoint> new_points;
   /// Observations of the new points in earlier keyframes (e.g. the feature's origin keyframe).
   std::vector<KeyframeObservation> earlier_observations;
-  /// For place recognition: the grey image and its spread corners (pixels).
+  /// The grey image as captured (distorted). The loop closer extracts its place-recognition
+  /// features and cuts the patches of loop verification from it, off the camera's thread.
   cv::Mat image;
-  std::vector<Eigen::Vector2d> corners_px;
+  /// The version of the last MapUpdate the tracker had applied when it made this keyframe. A
+  /// message made before a loop correction is in the old world frame: the receivers bring it
+  /// into the corrected frame (map/map_update.h, CorrectionHistory).
+  std::uint64_t map_version = 0;
 };
 
 /// A correction of the tracker's map by the mapper. Applied by the tracker at the start of its
@@ -55,6 +59,12 @@ struct MapUpdate {
   std::vector<std::pair<KeyframeId, geometry::SE3>> keyframe_poses;  ///< T_kf_world.
   std::vector<std::pair<PointId, Eigen::Vector3d>> point_positions;  ///< p_world.
   std::vector<PointId> removed_points;  ///< Dropped by the mapper (outliers).
+  /// Loop closure only: for each corrected keyframe k, the similarity C_k mapping old world
+  /// coordinates near k into corrected ones (p_new = C_k p_old). Anything anchored to k (a frame
+  /// of the trajectory, a point) moves with it; S_new_old is C of the newest keyframe.
+  std::vector<std::pair<KeyframeId, geometry::Sim3>> keyframe_corrections;
+
+  bool isLoopCorrection() const { return S_new_old.has_value(); }
 };
 
 }  // namespace scale_drift_slam::map

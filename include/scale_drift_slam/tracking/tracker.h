@@ -33,7 +33,6 @@ struct TrackerParams {
   int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
   int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera.
-  int keyframe_corners = 300;       ///< Corners stored with a keyframe for place recognition.
   int retire_after_searches = 10;   ///< Points searched this often...
   double retire_found_ratio = 0.3;  ///< ...and found less than this share are not searched.
   FeatureDetectionParams features;
