@@ -1,5 +1,6 @@
 #include "scale_drift_slam/map/map.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -46,6 +47,20 @@ void Map::addObservation(KeyframeId keyframe_id, PointId point_id, const Eigen::
   keyframes_.at(keyframe_id).observations.push_back({point_id, xy});
   points_.at(point_id).observed_by.push_back(keyframe_id);
   ++num_observations_;
+  ++version_;
+}
+
+void Map::removePoint(PointId id) {
+  const auto it = points_.find(id);
+  if (it == points_.end()) return;
+  for (const KeyframeId keyframe_id : it->second.observed_by) {
+    std::vector<Observation>& observations = keyframes_.at(keyframe_id).observations;
+    const auto end = std::remove_if(observations.begin(), observations.end(),
+                                    [id](const Observation& o) { return o.point_id == id; });
+    num_observations_ -= static_cast<std::size_t>(observations.end() - end);
+    observations.erase(end, observations.end());
+  }
+  points_.erase(it);
   ++version_;
 }
 

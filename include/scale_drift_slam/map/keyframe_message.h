@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -63,8 +64,37 @@ struct MapUpdate {
   /// coordinates near k into corrected ones (p_new = C_k p_old). Anything anchored to k (a frame
   /// of the trajectory, a point) moves with it; S_new_old is C of the newest keyframe.
   std::vector<std::pair<KeyframeId, geometry::Sim3>> keyframe_corrections;
+  /// Loop closure only: the keyframe pairs of the loop constraint(s): the tracker may search the
+  /// points of one from the other's neighbourhood from now on.
+  std::vector<std::pair<KeyframeId, KeyframeId>> loop_links;
 
   bool isLoopCorrection() const { return S_new_old.has_value(); }
+};
+
+/// The tracker is lost: where is this frame? Answered by the loop closer (place recognition and
+/// P3P against the map), asynchronously: the tracker keeps the frame and goes on meanwhile.
+struct RelocalisationRequest {
+  std::uint64_t frame_index = 0;  ///< The tracker's frame counter, to match the answer.
+  double timestamp = 0.0;
+  std::uint64_t map_version = 0;  ///< Of the last MapUpdate the tracker had applied.
+  cv::Mat image;                  ///< Grey, as captured (distorted).
+};
+
+struct RelocalisationAnswer {
+  std::uint64_t frame_index = 0;
+  double timestamp = 0.0;
+  bool success = false;
+  std::string reason;             ///< Why it failed; empty on success.
+  KeyframeId keyframe_id = 0;     ///< The keyframe it was localised against.
+  geometry::SE3 T_cam_world;      ///< The frame's pose (on success).
+  std::uint64_t map_version = 0;  ///< The loop closer's view of the map version.
+  struct FoundPoint {
+    PointId id = 0;
+    Eigen::Vector2d px = Eigen::Vector2d::Zero();  ///< Raw pixel in the frame.
+    Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< Undistorted normalised coordinates.
+  };
+  std::vector<FoundPoint> points;  ///< Map points found in the frame (inliers of the pose).
+  int inliers = 0;                 ///< 2D-3D inliers of the pose.
 };
 
 }  // namespace scale_drift_slam::map

@@ -50,6 +50,8 @@ class Map {
   /// Records that `keyframe_id` observes `point_id` at `xy`. Throws std::invalid_argument when
   /// either is unknown.
   void addObservation(KeyframeId keyframe_id, PointId point_id, const Eigen::Vector2d& xy);
+  /// Removes a point and its observations; an unknown id is ignored.
+  void removePoint(PointId id);
 
   bool hasKeyframe(KeyframeId id) const { return keyframes_.count(id) != 0; }
   bool hasPoint(PointId id) const { return points_.count(id) != 0; }

@@ -1,0 +1,55 @@
+#include "scale_drift_slam/map/map_update.h"
+
+namespace scale_drift_slam::map {
+
+geometry::SE3 correctPose(const geometry::SE3& T_cam_world, const geometry::Sim3& S_new_old) {
+  return (geometry::Sim3(T_cam_world) * S_new_old.inverse()).toSE3();
+}
+
+bool applyMapUpdate(const MapUpdate& update, Map& map, std::uint64_t* applied_version) {
+  if (applied_version) {
+    if (update.map_version < *applied_version) return false;
+    *applied_version = update.map_version;
+  }
+  if (update.S_new_old) {
+    for (auto& [id, keyframe] : map.keyframes())
+      keyframe.T_kf_world = correctPose(keyframe.T_kf_world, *update.S_new_old);
+    for (auto& [id, point] : map.points())
+      point.p_world = *update.S_new_old * point.p_world;
+  }
+  for (const auto& [id, T_kf_world] : update.keyframe_poses) {
+    if (map.hasKeyframe(id)) map.keyframe(id).T_kf_world = T_kf_world;
+  }
+  for (const auto& [id, p_world] : update.point_positions) {
+    if (map.hasPoint(id)) map.point(id).p_world = p_world;
+  }
+  for (const PointId id : update.removed_points)
+    map.removePoint(id);
+  map.bumpVersion();
+  return true;
+}
+
+void CorrectionHistory::record(const MapUpdate& update) {
+  if (update.S_new_old) corrections_.emplace_back(update.map_version, *update.S_new_old);
+}
+
+std::optional<geometry::Sim3> CorrectionHistory::correctionSince(std::uint64_t version) const {
+  std::optional<geometry::Sim3> S;
+  for (const auto& [correction_version, S_new_old] : corrections_) {
+    if (correction_version <= version) continue;
+    S = S ? S_new_old * *S : S_new_old;
+  }
+  return S;
+}
+
+bool CorrectionHistory::bringUpToDate(KeyframeMessage& message) const {
+  const std::optional<geometry::Sim3> S = correctionSince(message.map_version);
+  if (!S) return false;
+  message.keyframe.T_kf_world = correctPose(message.keyframe.T_kf_world, *S);
+  for (NewMapPoint& point : message.new_points)
+    point.p_world = *S * point.p_world;
+  message.map_version = corrections_.back().first;
+  return true;
+}
+
+}  // namespace scale_drift_slam::map
