@@ -1,6 +1,9 @@
 #include "scale_drift_slam/tracking/feature_candidates.h"
 
 #include <stdexcept>
+#include <unordered_map>
+
+#include "scale_drift_slam/map/map_update.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -107,16 +110,24 @@ int FeatureCandidates::spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf
 
 void FeatureCandidates::apply(const map::MapUpdate& update) {
   if (update.keyframe_poses.empty() && !update.S_new_old) return;
+  std::unordered_map<map::KeyframeId, const geometry::SE3*> poses;
+  for (const auto& [id, T_kf_world] : update.keyframe_poses)
+    poses[id] = &T_kf_world;
+  std::unordered_map<map::KeyframeId, double> scales;  // of the loop correction per keyframe
+  for (const auto& [id, C] : update.keyframe_corrections)
+    scales[id] = C.scale();
   for (Candidate& c : candidates_) {
     for (PromotionView& view : c.views) {
-      if (update.S_new_old) {
-        view.T_kf_world = (geometry::Sim3(view.T_kf_world) * update.S_new_old->inverse()).toSE3();
-      }
-      for (const auto& [id, T_kf_world] : update.keyframe_poses) {
-        if (id == view.keyframe_id) view.T_kf_world = T_kf_world;
-      }
+      if (update.S_new_old) view.T_kf_world = map::correctPose(view.T_kf_world, *update.S_new_old);
+      const auto pose = poses.find(view.keyframe_id);
+      if (pose != poses.end()) view.T_kf_world = *pose->second;
     }
     c.filter.setOriginPose(c.views.front().T_kf_world);
+    if (update.S_new_old) {
+      // The world near the origin keyframe was scaled by s: so is the feature's depth.
+      const auto scale = scales.find(c.filter.originId());
+      c.filter.rescaleDepth(scale != scales.end() ? scale->second : update.S_new_old->scale());
+    }
   }
 }
 

@@ -158,4 +158,13 @@ Eigen::Vector3d InverseDepthFilter::pointInWorld() const {
   return T_origin_world_.inverse() * pointInOrigin();
 }
 
+void InverseDepthFilter::rescaleDepth(double s) {
+  if (!(s > 0.0) || !std::isfinite(s)) {
+    throw std::invalid_argument("inverse-depth filter: a depth scale must be positive");
+  }
+  y_.z() /= s;
+  const Eigen::Vector3d D(1.0, 1.0, s);  // Lambda' = D Lambda D for y' = D^-1 y
+  information_ = D.asDiagonal() * information_ * D.asDiagonal();
+}
+
 }  // namespace scale_drift_slam::tracking

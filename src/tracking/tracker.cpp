@@ -5,6 +5,8 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "scale_drift_slam/map/map_update.h"
+
 namespace scale_drift_slam::tracking {
 namespace {
 
@@ -45,10 +47,15 @@ void TrackerParams::validate() const {
   if (good_inliers < min_inliers) {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
   }
-  if (local_recent_keyframes < 1 || local_nearest_keyframes < 0) {
+  if (local_recent_keyframes < 1 || local_nearest_keyframes < 0 ||
+      local_covisibility_min_shared < 1) {
     throw std::invalid_argument(
         "tracker.local_recent_keyframes must be >= 1, "
-        "local_nearest_keyframes >= 0");
+        "local_nearest_keyframes >= 0, local_covisibility_min_shared >= 1");
+  }
+  if (max_rejected_frames < 1 || relocalisation_retry_frames < 1) {
+    throw std::invalid_argument(
+        "tracker.max_rejected_frames and relocalisation_retry_frames must be >= 1");
   }
   if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
     throw std::invalid_argument(
@@ -93,22 +100,23 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   FrameResult result;
   result.timestamp = timestamp;
   result.state = state_;
+  result.loop_correction = pending_loop_correction_;
+  pending_loop_correction_.reset();
   ++frame_index_;
   cv::Mat grey;
   try {
     grey = toGrey(image, encoding);
   } catch (const std::invalid_argument& e) {
-    result.rejected = true;
-    result.message = std::string("frame rejected: ") + e.what();
+    rejectFrame(e.what(), &result);
     return result;
   }
   const std::string problem =
       frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {
-    result.rejected = true;
-    result.message = "frame rejected: " + problem;
+    rejectFrame(problem, &result);
     return result;
   }
+  rejected_in_row_ = 0;
   const ImagePyramid pyramid =
       buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
   result.times.prepare = stage.lapMs();
@@ -125,14 +133,77 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
     result.rejected = true;
     result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
   }
+  if (state_ == TrackingState::kLost && !result.rejected) {
+    requestRelocalisation(timestamp, pyramid, &result);
+  }
+  if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
   result.state = state_;
   result.times.total = total.lapMs();
   result.times.cpu = threadCpuMs() - cpu_start;
   return result;
 }
 
+void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
+  result->rejected = true;
+  result->message = "frame rejected: " + reason;
+  const bool tracking = state_ == TrackingState::kGood || state_ == TrackingState::kWeak;
+  if (tracking && ++rejected_in_row_ >= params_.max_rejected_frames) {
+    // The camera moved on unseen: the motion prior has nothing to go on any more.
+    state_ = TrackingState::kLost;
+    previous_measurements_.clear();
+    result->message += "; lost after " + std::to_string(rejected_in_row_) + " unusable frames";
+  }
+  result->state = state_;
+}
+
+void Tracker::requestRelocalisation(double timestamp, const ImagePyramid& image,
+                                    FrameResult* result) {
+  if (relocalisation_ && frame_index_ - relocalisation_->frame_index <
+                             static_cast<std::uint64_t>(params_.relocalisation_retry_frames)) {
+    return;  // one request at a time
+  }
+  relocalisation_ = PendingRelocalisation{frame_index_, image};
+  map::RelocalisationRequest request;
+  request.frame_index = frame_index_;
+  request.timestamp = timestamp;
+  request.map_version = map_.version();
+  request.image = image.base().clone();
+  result->relocalisation_request = std::move(request);
+}
+
+bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
+  if (!relocalisation_ || answer.frame_index != relocalisation_->frame_index) return false;
+  const PendingRelocalisation pending = std::move(*relocalisation_);
+  relocalisation_.reset();
+  // Useless when it failed, when tracking recovered meanwhile, or when the answer's world frame
+  // predates a loop correction the tracker has applied since.
+  if (!answer.success || state_ != TrackingState::kLost) return false;
+  if (answer.map_version < last_loop_version_) return false;
+  std::vector<Measurement> found;
+  for (const map::RelocalisationAnswer::FoundPoint& p : answer.points) {
+    if (map_.hasPoint(p.id)) found.push_back({p.id, p.px, p.xy});
+  }
+  if (static_cast<int>(found.size()) < params_.min_inliers) return false;
+  // Track the next frame from the relocalised one: the flow carries the found points over.
+  previous_measurements_ = std::move(found);
+  previous_image_ = pending.image;
+  T_previous_world_ = T_before_previous_world_ = answer.T_cam_world;
+  last_scene_depth_ = sceneDepth(answer.T_cam_world);
+  resume_from_relocalisation_ = true;
+  return true;
+}
+
 void Tracker::applyMapUpdate(const map::MapUpdate& update) {
-  if (map_.apply(update)) candidates_.apply(update);
+  if (!map_.apply(update)) return;
+  candidates_.apply(update);
+  if (!update.S_new_old) return;
+  // A loop correction: the camera moves with the newest keyframe.
+  const geometry::Sim3& S = *update.S_new_old;
+  T_previous_world_ = map::correctPose(T_previous_world_, S);
+  T_before_previous_world_ = map::correctPose(T_before_previous_world_, S);
+  last_scene_depth_ *= S.scale();
+  pending_loop_correction_ = pending_loop_correction_ ? S * *pending_loop_correction_ : S;
+  last_loop_version_ = update.map_version;
 }
 
 map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,

@@ -34,6 +34,8 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   result->times.motion_ba = elapsedMs(&clock);
 
   previous_image_ = image;
+  const bool from_relocalisation = resume_from_relocalisation_;
+  resume_from_relocalisation_ = false;
   if (result->num_inliers < params_.min_inliers) {
     // Lost: say so, keep the last pose, add no keyframe. The filters cannot be updated without
     // a pose; they keep their last pixels.
@@ -42,6 +44,10 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
     result->message = "lost: " + std::to_string(result->num_inliers) + " inliers of " +
                       std::to_string(result->num_found) + " matches";
     return;
+  }
+  if (state_ == TrackingState::kLost) {
+    result->relocalised = from_relocalisation;
+    result->message = from_relocalisation ? "relocalised" : "recovered";
   }
   state_ =
       result->num_inliers >= params_.good_inliers ? TrackingState::kGood : TrackingState::kWeak;
@@ -84,8 +90,13 @@ MotionPrior Tracker::estimatePrior(const ImagePyramid& image,
 std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
                                                  const ImagePyramid& image,
                                                  std::vector<map::PointId>* ids) {
+  std::vector<map::PointId> tracked;
+  tracked.reserve(previous_measurements_.size());
+  for (const Measurement& m : previous_measurements_)
+    tracked.push_back(m.id);
   *ids = map_.localPoints(prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
-                          params_.local_nearest_keyframes, frame_index_);
+                          params_.local_nearest_keyframes, tracked,
+                          params_.local_covisibility_min_shared, frame_index_);
   std::vector<SearchPoint> search_points;
   search_points.reserve(ids->size());
   for (const map::PointId id : *ids) {

@@ -2,11 +2,32 @@
 
 #include <algorithm>
 
+#include "scale_drift_slam/map/map_update.h"
+
 namespace scale_drift_slam::tracking {
 
 void TrackingMap::addKeyframe(TrackedKeyframe keyframe) {
   const map::KeyframeId id = keyframe.id;
+  for (const map::PointId point : keyframe.points)
+    addObservation(id, point);
   keyframes_[id] = std::move(keyframe);
+}
+
+void TrackingMap::addObservation(map::KeyframeId keyframe, map::PointId point) {
+  std::vector<map::KeyframeId>& observers = observers_[point];
+  for (const map::KeyframeId other : observers) {
+    if (other == keyframe) return;
+  }
+  for (const map::KeyframeId other : observers) {
+    ++shared_[keyframe][other];
+    ++shared_[other][keyframe];
+  }
+  observers.push_back(keyframe);
+}
+
+void TrackingMap::linkKeyframes(map::KeyframeId a, map::KeyframeId b) {
+  links_[a].push_back(b);
+  links_[b].push_back(a);
 }
 
 void TrackingMap::addPoint(TrackedPoint point) {
@@ -16,7 +37,9 @@ void TrackingMap::addPoint(TrackedPoint point) {
 
 void TrackingMap::linkPoint(map::KeyframeId keyframe, map::PointId point) {
   const auto it = keyframes_.find(keyframe);
-  if (it != keyframes_.end()) it->second.points.push_back(point);
+  if (it == keyframes_.end()) return;
+  it->second.points.push_back(point);
+  addObservation(keyframe, point);
 }
 
 bool TrackingMap::apply(const map::MapUpdate& update) {
@@ -24,11 +47,8 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
   version_ = update.map_version;
   if (update.S_new_old) {
     const geometry::Sim3& S = *update.S_new_old;
-    const geometry::Sim3 S_inv = S.inverse();
-    for (auto& [id, keyframe] : keyframes_) {
-      // T_kf_new = T_kf_old S^-1 as a similarity; its rigid part keeps the camera centre.
-      keyframe.T_kf_world = (geometry::Sim3(keyframe.T_kf_world) * S_inv).toSE3();
-    }
+    for (auto& [id, keyframe] : keyframes_)
+      keyframe.T_kf_world = map::correctPose(keyframe.T_kf_world, S);
     for (auto& [id, point] : points_)
       point.p_world = S * point.p_world;
   }
@@ -42,21 +62,62 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
   }
   for (const map::PointId id : update.removed_points)
     points_.erase(id);
+  for (const auto& [a, b] : update.loop_links) {
+    if (keyframes_.count(a) && keyframes_.count(b)) linkKeyframes(a, b);
+  }
   return true;
+}
+
+std::unordered_set<map::KeyframeId> TrackingMap::neighbourhood(
+    const std::vector<map::KeyframeId>& start, int steps, int min_shared) const {
+  std::unordered_set<map::KeyframeId> reached(start.begin(), start.end());
+  std::vector<map::KeyframeId> frontier = start;
+  for (int step = 0; step < steps && !frontier.empty(); ++step) {
+    std::vector<map::KeyframeId> next;
+    const auto visit = [&](map::KeyframeId other) {
+      if (reached.insert(other).second) next.push_back(other);
+    };
+    for (const map::KeyframeId id : frontier) {
+      if (const auto shared = shared_.find(id); shared != shared_.end()) {
+        for (const auto& [other, count] : shared->second) {
+          if (count >= min_shared) visit(other);
+        }
+      }
+      if (const auto links = links_.find(id); links != links_.end()) {
+        for (const map::KeyframeId other : links->second)
+          visit(other);
+      }
+    }
+    frontier = std::move(next);
+  }
+  return reached;
 }
 
 std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera_centre,
                                                    int num_recent, int num_nearest,
-                                                   std::uint64_t frame) {
+                                                   const std::vector<map::PointId>& tracked,
+                                                   int min_shared, std::uint64_t frame) {
   std::vector<map::KeyframeId> chosen;
   for (auto it = keyframes_.rbegin();
        it != keyframes_.rend() && static_cast<int>(chosen.size()) < num_recent; ++it) {
     chosen.push_back(it->first);
   }
+  // The tracked region: the newest keyframes and those observing the points just tracked.
+  std::vector<map::KeyframeId> region = chosen;
+  std::unordered_set<map::KeyframeId> in_region(region.begin(), region.end());
+  for (const map::PointId point : tracked) {
+    const auto observers = observers_.find(point);
+    if (observers == observers_.end()) continue;
+    for (const map::KeyframeId id : observers->second) {
+      if (keyframes_.count(id) && in_region.insert(id).second) region.push_back(id);
+    }
+  }
   std::vector<std::pair<double, map::KeyframeId>> by_distance;
-  for (const auto& [id, keyframe] : keyframes_) {
+  for (const map::KeyframeId id : neighbourhood(region, 2, min_shared)) {
+    const auto it = keyframes_.find(id);
+    if (it == keyframes_.end()) continue;
     by_distance.emplace_back(
-        (keyframe.T_kf_world.inverseTranslation() - camera_centre).squaredNorm(), id);
+        (it->second.T_kf_world.inverseTranslation() - camera_centre).squaredNorm(), id);
   }
   const std::size_t n = std::min<std::size_t>(num_nearest, by_distance.size());
   std::partial_sort(by_distance.begin(), by_distance.begin() + n, by_distance.end());

@@ -75,10 +75,30 @@ TEST(TrackingMap, LocalPointsFromNewestAndNearestKeyframes) {
   TrackingMap map = smallMap();
   map.linkPoint(3, 0);  // point 0 is also seen by keyframe 3: it must come once
   // Newest keyframe (3) and the one nearest to x = 0.1 (keyframe 0).
-  std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, 1);
+  std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {}, 1, 1);
   std::sort(ids.begin(), ids.end());
   EXPECT_EQ(ids, (std::vector<map::PointId>{0, 1, 6, 7}));
   EXPECT_EQ(map.keyframeCentres().size(), 4u);
+}
+
+TEST(TrackingMap, NearestKeyframesComeOnlyFromTheCovisibleNeighbourhood) {
+  TrackingMap map = smallMap();  // no keyframes share points: none is linked to the newest (3)
+  std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {}, 1, 1);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<map::PointId>{6, 7}));  // keyframe 0 is near but unrelated
+  // A point tracked in the previous frame brings its keyframe into the tracked region.
+  ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {1}, 1, 2);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<map::PointId>{0, 1, 6, 7}));
+  // A loop link joins keyframe 1 to the newest.
+  map.linkKeyframes(3, 1);
+  ids = map.localPoints(Eigen::Vector3d(1.1, 0, 0), 1, 1, {}, 1, 3);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<map::PointId>{2, 3, 6, 7}));
+  // Two keyframes sharing fewer points than min_shared are not neighbours.
+  map.linkPoint(3, 0);
+  EXPECT_EQ(map.neighbourhood({3}, 1, 2).count(0), 0u);
+  EXPECT_EQ(map.neighbourhood({3}, 1, 1).count(0), 1u);
 }
 
 }  // namespace

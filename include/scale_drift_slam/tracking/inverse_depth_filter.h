@@ -73,6 +73,9 @@ class InverseDepthFilter {
   /// After the origin keyframe was re-optimised (window BA): the feature stays attached to it.
   void setOriginPose(const geometry::SE3& T_origin_world) { T_origin_world_ = T_origin_world; }
   const geometry::SE3& originPose() const { return T_origin_world_; }
+  /// After a loop correction scaled the world around the origin by `s` (> 0): depth times s,
+  /// q / s, and the information of q times s^2 (its uncertainty scales with it).
+  void rescaleDepth(double s);
   int numUpdates() const { return num_updates_; }
   const InverseDepthFilterParams& params() const { return params_; }
 

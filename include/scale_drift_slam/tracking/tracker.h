@@ -32,9 +32,14 @@ struct TrackerParams {
   int good_inliers = 50;            ///< Inliers for "good" tracking (keyframes only then).
   int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
-  int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera.
-  int retire_after_searches = 10;   ///< Points searched this often...
-  double retire_found_ratio = 0.3;  ///< ...and found less than this share are not searched.
+  int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera among
+                                    ///< the co-visibility neighbourhood of the tracked region,
+  int local_covisibility_min_shared = 5;  ///< ...keyframes sharing this many points being linked.
+  int retire_after_searches = 10;         ///< Points searched this often...
+  double retire_found_ratio = 0.3;        ///< ...and found less than this share are not searched.
+  int max_rejected_frames = 3;            ///< This many unusable frames in a row: lost.
+  /// While lost, a relocalisation request not answered within this many frames is sent again.
+  int relocalisation_retry_frames = 30;
   FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -64,6 +69,14 @@ struct FrameResult {
   geometry::SE3 T_cam_world;
   int num_visible = 0, num_found = 0, num_inliers = 0;
   std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
+  /// The newest keyframe when the frame was tracked: the frame's pose moves with its loop
+  /// corrections (mapping::CorrectedTrajectory).
+  std::optional<map::KeyframeId> reference_keyframe;
+  /// Loop corrections applied since the previous frame: world points moved by p_new = S p_old.
+  std::optional<geometry::Sim3> loop_correction;
+  /// Lost: where is this frame? (for the loop closer; at most one request outstanding).
+  std::optional<map::RelocalisationRequest> relocalisation_request;
+  bool relocalised = false;  ///< Tracking resumed at this frame from a relocalisation answer.
   StageTimes times;
   std::string message;
 };
@@ -77,6 +90,10 @@ class Tracker {
   FrameResult processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding);
   /// Applies a mapper correction to the local map (call between frames).
   void applyMapUpdate(const map::MapUpdate& update);
+  /// Takes the loop closer's answer to the last relocalisation request (call between frames).
+  /// Returns true when it was used: the next frame is tracked from the relocalised frame, its
+  /// pose and the map points found in it. Stale, failed or unneeded answers are ignored.
+  bool applyRelocalisation(const map::RelocalisationAnswer& answer);
 
   TrackingState state() const { return state_; }
   const TrackingMap& trackingMap() const { return map_; }
@@ -104,6 +121,8 @@ class Tracker {
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                     const ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
+  void rejectFrame(const std::string& reason, FrameResult* result);
+  void requestRelocalisation(double timestamp, const ImagePyramid& image, FrameResult* result);
 
   std::shared_ptr<const geometry::CameraModel> camera_;
   TrackerParams params_;
@@ -121,6 +140,15 @@ class Tracker {
   std::uint64_t frame_index_ = 0;
   map::KeyframeId next_keyframe_id_ = 0;
   map::PointId next_point_id_ = 0;
+  int rejected_in_row_ = 0;
+  std::optional<geometry::Sim3> pending_loop_correction_;  ///< Reported with the next frame.
+  std::uint64_t last_loop_version_ = 0;  ///< Map version of the last loop correction applied.
+  struct PendingRelocalisation {
+    std::uint64_t frame_index = 0;
+    ImagePyramid image;
+  };
+  std::optional<PendingRelocalisation> relocalisation_;  ///< The request outstanding.
+  bool resume_from_relocalisation_ = false;
 };
 
 }  // namespace scale_drift_slam::tracking

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include <Eigen/Core>
@@ -41,16 +42,29 @@ class TrackingMap {
   void addPoint(TrackedPoint point);
   /// Records that a keyframe sees a point (for the selection of local points).
   void linkPoint(map::KeyframeId keyframe, map::PointId point);
+  /// Joins two keyframes that a loop closure found to show the same place: each becomes a
+  /// neighbour of the other in the local map's graph.
+  void linkKeyframes(map::KeyframeId a, map::KeyframeId b);
 
   /// Applies a mapper correction: the optional similarity first, then poses and positions of
   /// known ids, then removals. Updates older than the last applied version are ignored.
   /// Returns false when ignored.
   bool apply(const map::MapUpdate& update);
 
-  /// The points of the `num_recent` newest keyframes and of the `num_nearest` keyframes whose
-  /// centres are closest to `camera_centre`, each once (ids). `frame` stamps the selection.
+  /// The local map (ids, each once): the points of the `num_recent` newest keyframes and of the
+  /// `num_nearest` keyframes closest to `camera_centre` among the neighbourhood of the tracked
+  /// region. The region is the newest keyframes and those observing `tracked` (the points found
+  /// in the previous frame); its neighbourhood is what the graph of co-visibility (keyframes
+  /// sharing at least `min_shared` points) and loop links reaches from it in two steps. So
+  /// points of a distant part of the map are not searched just because the drifted pose estimate
+  /// comes near it: a large loop is closed by loop closure (Sim(3), scale included), not by
+  /// silently re-finding old points in a drifted frame. `frame` stamps the selection.
   std::vector<map::PointId> localPoints(const Eigen::Vector3d& camera_centre, int num_recent,
-                                        int num_nearest, std::uint64_t frame);
+                                        int num_nearest, const std::vector<map::PointId>& tracked,
+                                        int min_shared, std::uint64_t frame);
+  /// The keyframes within `steps` of `start` in that graph (start included).
+  std::unordered_set<map::KeyframeId> neighbourhood(const std::vector<map::KeyframeId>& start,
+                                                    int steps, int min_shared) const;
   /// Keyframe centres (id, centre in the world) for the keyframe rule.
   std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframeCentres() const;
 
@@ -68,6 +82,12 @@ class TrackingMap {
   std::map<map::KeyframeId, TrackedKeyframe> keyframes_;
   std::unordered_map<map::PointId, TrackedPoint> points_;
   std::uint64_t version_ = 0;
+  /// The graph of the local map: keyframes observing each point, shared points per keyframe
+  /// pair, loop links.
+  void addObservation(map::KeyframeId keyframe, map::PointId point);
+  std::unordered_map<map::PointId, std::vector<map::KeyframeId>> observers_;
+  std::unordered_map<map::KeyframeId, std::unordered_map<map::KeyframeId, int>> shared_;
+  std::unordered_map<map::KeyframeId, std::vector<map::KeyframeId>> links_;
 };
 
 }  // namespace scale_drift_slam::tracking
