@@ -11,6 +11,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "scale_drift_slam/io/place_recognition_params_io.h"
+
 namespace scale_drift_slam::io {
 namespace {
 
@@ -21,12 +23,15 @@ struct Field {
   std::string section, key;
   std::variant<int*, double*, bool*> value;
   /// For enums kept as text: the parser and the printer.
-  std::function<void(const std::string&)> parse_text;
-  std::function<std::string()> print_text;
+  std::function<void(const std::string&)> parse_text = nullptr;
+  std::function<std::string()> print_text = nullptr;
 };
 
 std::vector<Field> fieldsOf(SlamParams& p) {
   auto& t = p.tracker;
+  auto& l = p.loop;
+  auto& v = p.loop.verification;
+  auto& c = p.mapper.loop_correction;
   std::vector<Field> f = {
       {"tracker", "pyramid_levels", &t.pyramid_levels},
       {"tracker", "min_contrast", &t.min_contrast},
@@ -34,8 +39,11 @@ std::vector<Field> fieldsOf(SlamParams& p) {
       {"tracker", "min_inliers", &t.min_inliers},
       {"tracker", "local_recent_keyframes", &t.local_recent_keyframes},
       {"tracker", "local_nearest_keyframes", &t.local_nearest_keyframes},
+      {"tracker", "local_covisibility_min_shared", &t.local_covisibility_min_shared},
       {"tracker", "retire_after_searches", &t.retire_after_searches},
       {"tracker", "retire_found_ratio", &t.retire_found_ratio},
+      {"tracker", "max_rejected_frames", &t.max_rejected_frames},
+      {"tracker", "relocalisation_retry_frames", &t.relocalisation_retry_frames},
       {"features", "fast_threshold", &t.features.fast_threshold},
       {"features", "min_fast_threshold", &t.features.min_fast_threshold},
       {"features", "border", &t.features.border},
@@ -102,6 +110,32 @@ std::vector<Field> fieldsOf(SlamParams& p) {
       {"window_ba", "function_tolerance", &p.mapper.window.function_tolerance},
       {"window_ba", "num_threads", &p.mapper.window.num_threads},
       {"mapper", "run_window_ba", &p.mapper.run_window_ba},
+      {"loop_closure", "enabled", &l.enabled},
+      {"loop_closure", "covisible_min_shared_points", &l.covisible_min_shared_points},
+      {"loop_closure", "relocalisation_candidates", &l.relocalisation_candidates},
+      {"loop_closure", "image_jpeg_quality", &l.image_jpeg_quality},
+      {"loop_closure", "relocalisation_min_inliers", &l.relocalisation_geometry.min_inliers},
+      {"loop_closure", "relocalisation_min_coverage", &l.relocalisation_geometry.min_coverage},
+      {"loop_verification", "depth_neighbours", &v.depth.k},
+      {"loop_verification", "depth_min_neighbours", &v.depth.min_neighbours},
+      {"loop_verification", "depth_max_distance_px", &v.depth.max_distance_px},
+      {"loop_verification", "depth_max_relative_spread", &v.depth.max_relative_spread},
+      {"loop_verification", "ransac_threshold_px", &v.constraint.ransac_threshold_px},
+      {"loop_verification", "ransac_iterations", &v.constraint.ransac_iterations},
+      {"loop_verification", "min_inliers", &v.constraint.min_inliers},
+      {"loop_verification", "min_inlier_ratio", &v.constraint.min_inlier_ratio},
+      {"loop_verification", "min_scale_pairs", &v.constraint.min_scale_pairs},
+      {"loop_verification", "search_rotation_sigma", &v.search_rotation_sigma},
+      {"loop_verification", "search_translation_sigma", &v.search_translation_sigma},
+      {"loop_verification", "min_final_inliers", &v.min_final_inliers},
+      {"loop_verification", "max_rmse_px", &v.max_rmse_px},
+      {"loop_verification", "min_scale", &v.min_scale},
+      {"loop_verification", "max_scale", &v.max_scale},
+      {"loop_correction", "max_iterations", &c.graph.max_iterations},
+      {"loop_correction", "covisibility_min_shared_points", &c.covisibility_min_shared_points},
+      {"loop_correction", "loop_edge_weight", &c.loop_edge_weight},
+      {"loop_correction", "structure_iterations", &c.structure.max_iterations},
+      {"loop_correction", "structure_huber_width_px", &c.structure.huber_width_px},
       {"system", "mapping_thread", &p.mapping_thread},
   };
   Field flow_method{"flow", "method", static_cast<int*>(nullptr)};
@@ -109,7 +143,17 @@ std::vector<Field> fieldsOf(SlamParams& p) {
     t.motion_prior.flow.method = tracking::parseFlowMethod(s);
   };
   flow_method.print_text = [&t] { return tracking::flowMethodName(t.motion_prior.flow.method); };
-  f.insert(f.begin() + 24, flow_method);
+  f.insert(
+      std::find_if(f.begin(), f.end(), [](const Field& field) { return field.section == "flow"; }),
+      flow_method);
+  Field graph_mode{"loop_correction", "mode", static_cast<int*>(nullptr)};
+  graph_mode.parse_text = [&c](const std::string& s) {
+    c.graph.mode = loop::parsePoseGraphMode(s);
+  };
+  graph_mode.print_text = [&c] { return loop::toString(c.graph.mode); };
+  f.insert(std::find_if(f.begin(), f.end(),
+                        [](const Field& field) { return field.section == "loop_correction"; }),
+           graph_mode);
   Field solver{"motion_ba", "solver", static_cast<int*>(nullptr)};
   solver.parse_text = [&t](const std::string& s) {
     if (s == "hand_written") {
@@ -171,6 +215,13 @@ SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
     known[field.section].insert(field.key);
   for (const auto& section : root) {
     const std::string name = section.first.as<std::string>();
+    if (name == "place_recognition") {
+      // Its own loader (io/place_recognition_params_io.h) and layout
+      // (config/place_recognition.yaml).
+      params.loop.recognition =
+          parsePlaceRecognitionParams(YAML::Dump(section.second), origin + " place_recognition");
+      continue;
+    }
     if (!known.count(name)) fail(origin, "unknown section '" + name + "'");
     if (!section.second.IsMap()) fail(origin, "section '" + name + "' must be a mapping");
     for (const auto& entry : section.second) {

@@ -73,8 +73,9 @@ bool ransacPose(const LoopConstraintInput& input, const LoopConstraintParams& pa
 
 }  // namespace
 
-LoopConstraintResult estimateLoopConstraint(const LoopConstraintInput& input,
-                                            const LoopConstraintParams& params) {
+LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
+                                      const LoopConstraintParams& params,
+                                      std::vector<bool>* inlier) {
   params.validate();
   validateInput(input);
   LoopConstraintResult result;
@@ -105,33 +106,46 @@ LoopConstraintResult estimateLoopConstraint(const LoopConstraintInput& input,
   c.T_current_loop = refined.T_cam_world;
   c.num_inliers = static_cast<int>(refined.statistics.num_inliers);
   c.rmse_px = refined.statistics.final_rmse_px;
+  if (inlier) *inlier = refined.inlier;
   if (c.num_inliers < params.min_inliers ||
       c.num_inliers < params.min_inlier_ratio * c.num_matches) {
     result.reason = "only " + std::to_string(c.num_inliers) + " of " +
                     std::to_string(c.num_matches) + " 2D-3D matches are inliers";
     return result;
   }
+  result.success = true;
+  return result;
+}
 
-  // Scale: median of |p^c| / |T_cl p^l| over the pairs in front of the current camera.
+bool estimateLoopScale(const std::vector<Match3D3D>& pairs, const LoopConstraintParams& params,
+                       LoopConstraint* constraint, std::string* reason) {
   std::vector<double> ratios;
-  for (const Match3D3D& m : input.point_pairs) {
-    const Eigen::Vector3d in_current = c.T_current_loop * m.p_loop;
+  for (const Match3D3D& m : pairs) {
+    const Eigen::Vector3d in_current = constraint->T_current_loop * m.p_loop;
     const double d_loop = in_current.norm(), d_current = m.p_current.norm();
     if (in_current.z() > 0.0 && m.p_current.z() > 0.0 && d_loop > 0.0 && d_current > 0.0) {
       ratios.push_back(d_current / d_loop);
     }
   }
-  c.num_scale_pairs = static_cast<int>(ratios.size());
-  if (c.num_scale_pairs < params.min_scale_pairs) {
-    result.reason = "only " + std::to_string(c.num_scale_pairs) + " usable 3D-3D pairs";
-    return result;
+  constraint->num_scale_pairs = static_cast<int>(ratios.size());
+  if (constraint->num_scale_pairs < params.min_scale_pairs) {
+    *reason = "only " + std::to_string(constraint->num_scale_pairs) + " usable 3D-3D pairs";
+    return false;
   }
   auto middle = ratios.begin() + ratios.size() / 2;
   std::nth_element(ratios.begin(), middle, ratios.end());
-  c.scale = *middle;
-  c.S_current_loop = geometry::Sim3::fromScale(c.T_current_loop.rotation(),
-                                               c.scale * c.T_current_loop.translation(), c.scale);
-  result.success = true;
+  constraint->scale = *middle;
+  const geometry::SE3& T = constraint->T_current_loop;
+  constraint->S_current_loop = geometry::Sim3::fromScale(
+      T.rotation(), constraint->scale * T.translation(), constraint->scale);
+  return true;
+}
+
+LoopConstraintResult estimateLoopConstraint(const LoopConstraintInput& input,
+                                            const LoopConstraintParams& params) {
+  LoopConstraintResult result = estimateLoopPose(input, params);
+  if (!result.success) return result;
+  result.success = estimateLoopScale(input.point_pairs, params, &result.constraint, &result.reason);
   return result;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 namespace scale_drift_slam::loop {
@@ -166,10 +167,39 @@ PlaceQueryResult PlaceRecognizer::query(map::KeyframeId id, double timestamp,
     islands.resize(static_cast<std::size_t>(params_.max_islands_checked));
   }
   for (const Island& island : islands) {
-    result.candidates.push_back(checkIsland(island, result.reference_score, appearance, groups));
+    result.candidates.push_back(
+        checkIsland(island, result.reference_score, appearance, groups, params_.geometry));
   }
   decide(position, id, islands, result);
   return result;
+}
+
+std::vector<LoopCandidate> PlaceRecognizer::findPlaces(const KeyframeAppearance& appearance,
+                                                       int max_candidates,
+                                                       const GeometricCheckParams& geometry) const {
+  if (!vocabularyReady() || database_.size() == 0 || max_candidates < 1) return {};
+  appearance.validate();
+  geometry.validate();
+  FeatureGroups groups;
+  const BowVector bow =
+      vocabulary_->transform(appearance.descriptors, groups, params_.geometry.group_levels_up);
+  std::vector<float> scores;
+  database_.scoreAll(bow, scores);
+  // A frame has no previous keyframe to normalise by: scores are taken relative to the best.
+  const double best = *std::max_element(scores.begin(), scores.end());
+  if (!(best > 0.0)) return {};
+  PlaceQueryResult counters;
+  std::vector<Island> islands = findIslands(scores, best, scores.size(),
+                                            std::numeric_limits<double>::infinity(), {}, counters);
+  if (islands.size() > static_cast<std::size_t>(max_candidates)) {
+    islands.resize(static_cast<std::size_t>(max_candidates));
+  }
+  std::vector<LoopCandidate> candidates;
+  for (const Island& island : islands) {
+    candidates.push_back(checkIsland(island, best, appearance, groups, geometry));
+    if (candidates.back().geometry.passed) candidates.back().status = CandidateStatus::kAccepted;
+  }
+  return candidates;
 }
 
 std::vector<PlaceRecognizer::Island> PlaceRecognizer::findIslands(
@@ -207,7 +237,8 @@ std::vector<PlaceRecognizer::Island> PlaceRecognizer::findIslands(
 
 LoopCandidate PlaceRecognizer::checkIsland(const Island& island, double reference,
                                            const KeyframeAppearance& appearance,
-                                           const FeatureGroups& groups) const {
+                                           const FeatureGroups& groups,
+                                           const GeometricCheckParams& geometry) const {
   const Stored& best = keyframes_[island.best];
   LoopCandidate candidate;
   candidate.keyframe_id = best.id;
@@ -217,8 +248,8 @@ LoopCandidate PlaceRecognizer::checkIsland(const Island& island, double referenc
   candidate.island_last_id = keyframes_[island.last].id;
   candidate.island_score = island.score;
   const std::vector<DescriptorMatch> matches =
-      matchDescriptors(appearance, groups, best.appearance, best.groups, params_.geometry);
-  candidate.geometry = checkGeometry(appearance, best.appearance, matches, params_.geometry);
+      matchDescriptors(appearance, groups, best.appearance, best.groups, geometry);
+  candidate.geometry = checkGeometry(appearance, best.appearance, matches, geometry);
   if (!candidate.geometry.passed) {
     candidate.status = CandidateStatus::kFailedGeometry;
     candidate.reason = candidate.geometry.reason;

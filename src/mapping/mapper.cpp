@@ -1,11 +1,36 @@
 #include "scale_drift_slam/mapping/mapper.h"
 
+#include <chrono>
+#include <map>
 #include <stdexcept>
 
+#include "scale_drift_slam/loop/map_correction.h"
+#include "scale_drift_slam/loop/pose_graph_builder.h"
+
 namespace scale_drift_slam::mapping {
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
+
+void LoopCorrectionParams::validate() const {
+  graph.validate();
+  structure.validate();
+  if (covisibility_min_shared_points < 0) {
+    throw std::invalid_argument("loop correction: covisibility_min_shared_points must be >= 0");
+  }
+  if (!(loop_edge_weight > 0.0)) {
+    throw std::invalid_argument("loop correction: loop_edge_weight must be > 0");
+  }
+}
 
 void MapperParams::validate() const {
   window.validate();
+  loop_correction.validate();
 }
 
 Mapper::Mapper(const MapperParams& params, double focal_length_px)
@@ -15,8 +40,8 @@ Mapper::Mapper(const MapperParams& params, double focal_length_px)
     throw std::invalid_argument("mapper needs a positive focal length");
 }
 
-map::MapUpdate Mapper::addKeyframe(const map::KeyframeMessage& message,
-                                   BundleStatistics* statistics) {
+map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics) {
+  corrections_.bringUpToDate(message);
   for (const map::NewMapPoint& point : message.new_points) {
     if (map_.hasPoint(point.id)) continue;
     map_.addPoint({point.id, point.p_world, point.reference_keyframe, {}});
@@ -49,6 +74,71 @@ map::MapUpdate Mapper::addKeyframe(const map::KeyframeMessage& message,
     }
   }
   update.map_version = map_.version();
+  return update;
+}
+
+map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
+                                 LoopCorrectionStatistics* statistics) {
+  const auto start = std::chrono::steady_clock::now();
+  LoopCorrectionStatistics stats;
+  stats.constraint = constraint;
+  map::MapUpdate update;
+  if (!map_.hasKeyframe(constraint.current_id) || !map_.hasKeyframe(constraint.loop_id)) {
+    stats.reason = "the map holds no keyframe " +
+                   std::to_string(map_.hasKeyframe(constraint.current_id) ? constraint.loop_id
+                                                                          : constraint.current_id);
+    if (statistics) *statistics = stats;
+    return update;
+  }
+  const LoopCorrectionParams& p = params_.loop_correction;
+  loop::PoseGraphEdge edge;
+  edge.from = constraint.current_id;
+  edge.to = constraint.loop_id;
+  edge.S_from_to = constraint.S_current_loop;
+  edge.information *= p.loop_edge_weight;
+  edge.kind = loop::EdgeKind::kLoop;
+  loop_edges_.push_back(edge);
+
+  // The graph over all keyframes, the oldest fixed (it defines the world frame).
+  loop::PoseGraphBuilderOptions builder;
+  builder.min_shared_points = p.covisibility_min_shared_points;
+  const map::KeyframeId oldest = map_.keyframes().begin()->first;
+  const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges_, {oldest}, builder);
+  stats.vertices = graph.vertices().size();
+  stats.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
+  stats.covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
+  stats.reprojection_before = reprojectionStats(map_, {focal_length_px_, focal_length_px_});
+  const loop::PoseGraphResult solved = graph.optimize(p.graph);
+  stats.graph_iterations = solved.iterations;
+  stats.graph_initial_chi2 = solved.initial_chi2;
+  stats.graph_final_chi2 = solved.final_chi2;
+  stats.graph_ms = 1e3 * solved.time_s;
+
+  // C_k = S_k_new^-1 T_k_old maps old world coordinates near keyframe k into corrected ones.
+  for (const auto& [id, S_kf_world] : solved.S_kf_world) {
+    update.keyframe_corrections.emplace_back(
+        id, S_kf_world.inverse() * geometry::Sim3(map_.keyframe(id).T_kf_world));
+  }
+  update.S_new_old = update.keyframe_corrections.back().second;  // the newest keyframe's
+  for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
+    update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
+  stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();
+  loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
+  const StructureOnlyBAResult structure =
+      refineStructure(map_, {}, {focal_length_px_, focal_length_px_}, p.structure);
+  stats.structure_ms = 1e3 * structure.time_s;
+  stats.reprojection_after = structure.after;
+
+  for (const auto& [id, keyframe] : map_.keyframes())
+    update.keyframe_poses.emplace_back(id, keyframe.T_kf_world);
+  for (const auto& [id, point] : map_.points())
+    update.point_positions.emplace_back(id, point.p_world);
+  map_.bumpVersion();
+  update.map_version = map_.version();
+  corrections_.record(update);
+  stats.applied = true;
+  stats.total_ms = msSince(start);
+  if (statistics) *statistics = stats;
   return update;
 }
 

@@ -1,12 +1,14 @@
 #include "scale_drift_slam/mapping/slam_system.h"
 
 #include <chrono>
+#include <utility>
 
 namespace scale_drift_slam::mapping {
 
 void SlamParams::validate() const {
   tracker.validate();
   mapper.validate();
+  loop.validate();
 }
 
 namespace {
@@ -16,12 +18,29 @@ double focalOf(const std::shared_ptr<const geometry::CameraModel>& camera) {
   return 0.5 * (camera->calibration().fx + camera->calibration().fy);
 }
 
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
 }  // namespace
 
 SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camera,
                        const SlamParams& params)
-    : params_(params), tracker_(camera, params.tracker), mapper_(params.mapper, focalOf(camera)) {
-  if (params_.mapping_thread) thread_ = std::thread([this] { mappingLoop(); });
+    : params_(params),
+      tracker_(camera, params.tracker),
+      mapper_(params.mapper, focalOf(camera)),
+      loop_closer_(camera, params.loop) {
+  if (params_.mapping_thread) {
+    mapping_thread_ = std::thread([this] {
+      while (std::optional<MapperInput> input = mapper_inbox_.waitPop())
+        handle(std::move(*input));
+    });
+    loop_thread_ = std::thread([this] {
+      while (std::optional<LoopInput> input = loop_inbox_.waitPop())
+        handle(std::move(*input));
+    });
+  }
 }
 
 SlamSystem::~SlamSystem() {
@@ -31,52 +50,153 @@ SlamSystem::~SlamSystem() {
 void SlamSystem::finish() {
   if (finished_) return;
   finished_ = true;
-  keyframes_.close();
-  if (thread_.joinable()) thread_.join();
+  if (params_.mapping_thread) {
+    // The loop closer first: its last constraints still reach the open mapper queue.
+    loop_inbox_.close();
+    if (loop_thread_.joinable()) loop_thread_.join();
+    mapper_inbox_.close();
+    if (mapping_thread_.joinable()) mapping_thread_.join();
+  } else {
+    runInline();
+  }
+  drainTrackerInbox();
 }
 
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
                                                tracking::PixelEncoding encoding) {
-  while (std::optional<map::MapUpdate> update = updates_.tryPop())
-    tracker_.applyMapUpdate(*update);
+  drainTrackerInbox();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
-  for (map::KeyframeMessage& message : result.keyframes) {
-    if (params_.mapping_thread && !finished_) {
-      // The tracker keeps its own copy of everything it needs; the message goes by value.
-      keyframes_.push(message);
-    } else {
-      runMapper(message);
+  if (result.has_pose) trajectory_.add(timestamp, result.T_cam_world, result.reference_keyframe);
+  if (!finished_) {
+    for (const map::KeyframeMessage& message : result.keyframes) {
+      // Both receivers get their own copy (the image buffer is shared, read-only).
+      mapper_inbox_.push(message);
+      loop_inbox_.push(message);
     }
+    if (result.relocalisation_request) loop_inbox_.push(*result.relocalisation_request);
   }
   if (!params_.mapping_thread) {
-    while (std::optional<map::MapUpdate> update = updates_.tryPop()) {
-      tracker_.applyMapUpdate(*update);
-    }
+    runInline();
+    drainTrackerInbox();
   }
   return result;
 }
 
-void SlamSystem::mappingLoop() {
-  while (std::optional<map::KeyframeMessage> message = keyframes_.waitPop())
-    runMapper(*message);
-}
-
-void SlamSystem::runMapper(const map::KeyframeMessage& message) {
-  BundleStatistics statistics;
-  const auto start = std::chrono::steady_clock::now();
-  map::MapUpdate update = mapper_.addKeyframe(message, &statistics);
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  {
-    std::lock_guard<std::mutex> lock(times_mutex_);
-    window_ba_ms_.push_back(ms);
+void SlamSystem::drainTrackerInbox() {
+  while (std::optional<TrackerInput> input = tracker_inbox_.tryPop()) {
+    if (const auto* update = std::get_if<map::MapUpdate>(&*input)) {
+      tracker_.applyMapUpdate(*update);
+      trajectory_.apply(*update);
+    } else {
+      tracker_.applyRelocalisation(std::get<map::RelocalisationAnswer>(*input));
+    }
   }
-  updates_.push(std::move(update));
 }
 
-std::vector<double> SlamSystem::windowBaTimesMs() const {
-  std::lock_guard<std::mutex> lock(times_mutex_);
-  return window_ba_ms_;
+void SlamSystem::runInline() {
+  bool progress = true;
+  while (progress) {
+    progress = false;
+    while (std::optional<MapperInput> input = mapper_inbox_.tryPop()) {
+      handle(std::move(*input));
+      progress = true;
+    }
+    while (std::optional<LoopInput> input = loop_inbox_.tryPop()) {
+      handle(std::move(*input));
+      progress = true;
+    }
+  }
+}
+
+void SlamSystem::publishUpdate(map::MapUpdate update) {
+  loop_inbox_.push(update);
+  tracker_inbox_.push(std::move(update));
+}
+
+void SlamSystem::handle(MapperInput input) {
+  const auto start = std::chrono::steady_clock::now();
+  if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
+    map::MapUpdate update = mapper_.addKeyframe(std::move(*message));
+    {
+      std::lock_guard<std::mutex> lock(record_mutex_);
+      times_.window_ba_ms.push_back(msSince(start));
+    }
+    publishUpdate(std::move(update));
+    return;
+  }
+  const loop::LoopConstraint& constraint = std::get<loop::LoopConstraint>(input);
+  LoopCorrectionStatistics c;
+  map::MapUpdate update = mapper_.closeLoop(constraint, &c);
+  log(c.applied
+          ? "loop " + std::to_string(constraint.current_id) + " -> " +
+                std::to_string(constraint.loop_id) + " corrected (" +
+                loop::toString(params_.mapper.loop_correction.graph.mode) + " graph of " +
+                std::to_string(c.vertices) + " keyframes, " + std::to_string(c.graph_iterations) +
+                " iterations, " + std::to_string(c.graph_ms) + " ms; structure-only BA " +
+                std::to_string(c.structure_ms) + " ms; total " + std::to_string(c.total_ms) + " ms)"
+          : "loop " + std::to_string(constraint.current_id) + " -> " +
+                std::to_string(constraint.loop_id) + " not applied: " + c.reason);
+  {
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    loops_.push_back(c);
+  }
+  if (c.applied) publishUpdate(std::move(update));
+}
+
+void SlamSystem::handle(LoopInput input) {
+  const auto start = std::chrono::steady_clock::now();
+  if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
+    const loop::LoopDetection detection = loop_closer_.addKeyframe(std::move(*message));
+    {
+      std::lock_guard<std::mutex> lock(record_mutex_);
+      times_.place_recognition_ms.push_back(detection.recognition_ms);
+      if (detection.verification) times_.verification_ms.push_back(detection.verification_ms);
+    }
+    if (detection.verification || !detection.recognition.candidates.empty()) {
+      log(detection.describe());
+    }
+    if (detection.constraint) mapper_inbox_.push(*detection.constraint);
+  } else if (auto* update = std::get_if<map::MapUpdate>(&input)) {
+    loop_closer_.applyMapUpdate(*update);
+  } else {
+    const map::RelocalisationAnswer answer =
+        loop_closer_.relocalise(std::get<map::RelocalisationRequest>(input));
+    {
+      std::lock_guard<std::mutex> lock(record_mutex_);
+      times_.relocalisation_ms.push_back(msSince(start));
+      relocalisations_ += answer.success;
+    }
+    log("relocalisation of frame " + std::to_string(answer.frame_index) + ": " +
+        (answer.success ? "against keyframe " + std::to_string(answer.keyframe_id) + ", " +
+                              std::to_string(answer.inliers) + " inliers"
+                        : "failed: " + answer.reason));
+    tracker_inbox_.push(answer);
+  }
+}
+
+void SlamSystem::log(std::string line) {
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  log_.push_back(std::move(line));
+}
+
+std::vector<std::string> SlamSystem::takeLog() {
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  return std::exchange(log_, {});
+}
+
+std::vector<LoopCorrectionStatistics> SlamSystem::loops() const {
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  return loops_;
+}
+
+BackgroundTimes SlamSystem::backgroundTimes() const {
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  return times_;
+}
+
+int SlamSystem::relocalisations() const {
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  return relocalisations_;
 }
 
 }  // namespace scale_drift_slam::mapping

@@ -1,7 +1,8 @@
-// run_sequence: the whole SLAM offline, in one process (tracking on this thread, the window BA on
-// the mapping thread), on a TUM, EuRoC or KITTI folder or a rosbag. Writes DIR/trajectory.txt
-// (every tracked frame, TUM, T_world_cam), DIR/keyframes.txt (the mapper's keyframes after the
-// last window BA, TUM) and DIR/summary.json (counts, per-stage timing, memory).
+// run_sequence: the whole SLAM offline, in one process (tracking on this thread, the window BA and
+// the loop closure on their own threads), on a TUM, EuRoC or KITTI folder or a rosbag. Writes
+// DIR/trajectory.txt (every tracked frame, corrected by the loop closures, TUM, T_world_cam),
+// DIR/trajectory_as_tracked.txt (the poses as they were output live), DIR/keyframes.txt (the
+// mapper's final keyframes, TUM) and DIR/summary.json (counts, loops, per-stage timing, memory).
 
 #include <unistd.h>
 
@@ -33,12 +34,15 @@ const char* const kUsage =
 Runs the monocular SLAM offline on DATASET: a TUM folder (rgb.txt [+ camera.yaml]), an EuRoC
 folder (mav0/cam0/data.csv + sensor.yaml), a KITTI odometry folder (image_0/, times.txt,
 calib.txt) or a rosbag (*.bag).
-  --out DIR            output folder: trajectory.txt, keyframes.txt (TUM), summary.json
+  --out DIR            output folder: trajectory.txt (corrected by loop closures),
+                       trajectory_as_tracked.txt, keyframes.txt (TUM), summary.json
   --calib FILE         calibration YAML (default: the dataset's own, or the bag's CameraInfo)
   --config FILE        SLAM parameters (default: built-in defaults = config/default.yaml)
   --topic NAME         bag image topic (default /camera/image_raw)
   --camera-info-topic NAME   bag CameraInfo topic (default /camera/camera_info)
   --max-frames N       stop after N frames (default: all)
+  --se3                correct loops with the SE(3) pose graph (the paper's baseline)
+  --no-loop-closure    no loop closure (relocalisation still works)
   --quiet              no progress bar, no parameter dump
 )";
 
@@ -94,16 +98,65 @@ void addTimes(const tracking::FrameResult& r, io::StageTimings* timings) {
   timings->add("tracking_cpu", r.times.cpu);
 }
 
+std::vector<io::StampedPose> correctedTrajectory(const mapping::SlamSystem& slam) {
+  std::vector<io::StampedPose> poses;
+  for (const map::CorrectedTrajectory::Frame& frame : slam.trajectory().frames())
+    poses.push_back({frame.timestamp, frame.T_cam_world.inverse()});
+  return poses;
+}
+
+void addBackgroundTimes(const mapping::SlamSystem& slam, io::StageTimings* timings) {
+  const mapping::BackgroundTimes times = slam.backgroundTimes();
+  for (const double ms : times.window_ba_ms)
+    timings->add("window_ba", ms);
+  for (const double ms : times.place_recognition_ms)
+    timings->add("place_recognition", ms);
+  for (const double ms : times.verification_ms)
+    timings->add("loop_verification", ms);
+  for (const double ms : times.relocalisation_ms)
+    timings->add("relocalisation", ms);
+  for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
+    if (loop.applied) timings->add("loop_correction", loop.total_ms);
+  }
+}
+
+/// The loops applied: keyframe ids, inliers, the measured scale and the correction's figures.
+nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
+  nlohmann::json loops = nlohmann::json::array();
+  for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
+    if (!loop.applied) continue;
+    const loop::LoopConstraint& c = loop.constraint;
+    loops.push_back({{"current_keyframe", c.current_id},
+                     {"loop_keyframe", c.loop_id},
+                     {"inliers", c.num_inliers},
+                     {"matches", c.num_matches},
+                     {"scale", c.scale},
+                     {"scale_pairs", c.num_scale_pairs},
+                     {"rmse_px", c.rmse_px},
+                     {"graph_keyframes", loop.vertices},
+                     {"graph_iterations", loop.graph_iterations},
+                     {"graph_ms", loop.graph_ms},
+                     {"structure_only_ba_ms", loop.structure_ms},
+                     {"correction_ms", loop.total_ms},
+                     {"correction_scale_at_current", loop.current_correction_scale},
+                     {"reprojection_median_px_before", loop.reprojection_before.median},
+                     {"reprojection_median_px_after", loop.reprojection_after.median}});
+  }
+  return loops;
+}
+
 int run(const io::CommandLine& args) {
   const auto start = std::chrono::steady_clock::now();
-  args.rejectUnknownFlags(
-      {"out", "calib", "config", "topic", "camera-info-topic", "max-frames", "quiet"});
+  args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
+                           "quiet", "se3", "no-loop-closure"});
   const std::string dataset = args.positional(0, "DATASET");
   const fs::path out = args.required("out");
   const long max_frames = args.integer("max-frames", -1);
   const bool quiet = args.has("quiet");
-  const mapping::SlamParams params =
-      args.has("config") ? io::loadSlamParams(args.required("config")) : mapping::SlamParams{};
+  mapping::SlamParams params;
+  if (args.has("config")) params = io::loadSlamParams(args.required("config"));
+  if (args.has("se3")) params.mapper.loop_correction.graph.mode = loop::PoseGraphMode::kSE3;
+  if (args.has("no-loop-closure")) params.loop.enabled = false;
   std::unique_ptr<io::ImageSequence> sequence = openDataset(args, dataset);
   geometry::CameraCalibration calibration;
   if (args.has("calib")) {
@@ -149,17 +202,24 @@ int run(const io::CommandLine& args) {
       if (r.state != tracking::TrackingState::kInitializing) timings.add("frame", frame_ms);
     }
     if (r.has_pose) trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
+    for (const std::string& line : slam.takeLog())
+      std::cout << (progress ? "\n" : "") << line << "\n";
     if (progress && (frames % 10 == 0 || frames == static_cast<int>(total))) {
       printProgress(frames, total, r);
     }
   }
   if (progress) std::fprintf(stderr, "\n");
   slam.finish();
-  for (const double ms : slam.windowBaTimesMs())
-    timings.add("window_ba", ms);
+  for (const std::string& line : slam.takeLog())
+    std::cout << line << "\n";
+  addBackgroundTimes(slam, &timings);
 
-  io::saveTumTrajectory((out / "trajectory.txt").string(), trajectory,
-                        "every tracked frame, T_world_cam, run_sequence " + dataset);
+  io::saveTumTrajectory((out / "trajectory.txt").string(), correctedTrajectory(slam),
+                        "every tracked frame corrected by the loop closures, T_world_cam, "
+                        "run_sequence " +
+                            dataset);
+  io::saveTumTrajectory((out / "trajectory_as_tracked.txt").string(), trajectory,
+                        "every tracked frame as output live, T_world_cam, run_sequence " + dataset);
   io::saveTumTrajectory((out / "keyframes.txt").string(), keyframePoses(slam.map()),
                         "keyframes after the last window BA, T_world_cam");
   const double peak_mib = io::peakMemoryMiB();
@@ -171,7 +231,8 @@ int run(const io::CommandLine& args) {
                                   {"keyframes", slam.map().numKeyframes()},
                                   {"points", slam.map().numPoints()},
                                   {"observations", slam.map().numObservations()},
-                                  {"loops", nlohmann::json::array()},
+                                  {"loops", loopsJson(slam)},
+                                  {"relocalisations", slam.relocalisations()},
                                   {"timing", timings.toJson()},
                                   {"startup_ms", startup_ms},
                                   {"peak_memory_mib", peak_mib}};
@@ -180,6 +241,8 @@ int run(const io::CommandLine& args) {
             << "; states:";
   for (const auto& [state, count] : states)
     std::cout << " " << state << " " << count;
+  std::cout << "\nloops closed: " << loopsJson(slam).size()
+            << ", relocalisations: " << slam.relocalisations();
   std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
             << " points, " << slam.map().numObservations() << " observations\n"
             << timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
@@ -190,5 +253,5 @@ int run(const io::CommandLine& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return io::runTool(argc, argv, kUsage, {"quiet"}, run);
+  return io::runTool(argc, argv, kUsage, {"quiet", "se3", "no-loop-closure"}, run);
 }

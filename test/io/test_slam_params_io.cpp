@@ -23,7 +23,8 @@ void expectFailure(const std::string& text, const std::string& reason) {
 TEST(SlamParamsIo, DefaultFileEqualsTheStructDefaults) {
   const mapping::SlamParams from_file =
       loadSlamParams(std::string(SDS_TEST_DATA_DIR) + "/../../config/default.yaml");
-  EXPECT_EQ(formatSlamParams(from_file), formatSlamParams(mapping::SlamParams{}));
+  const mapping::SlamParams defaults;
+  EXPECT_EQ(formatSlamParams(from_file), formatSlamParams(defaults));
 }
 
 TEST(SlamParamsIo, KeysOverrideDefaults) {
@@ -35,10 +36,29 @@ TEST(SlamParamsIo, KeysOverrideDefaults) {
   EXPECT_EQ(p.mapper.window.window_size, 7);
   EXPECT_EQ(p.tracker.motion_ba.solver, mapping::MotionOnlySolver::kCeres);
   EXPECT_FALSE(p.mapping_thread);
-  EXPECT_EQ(p.tracker.min_inliers, mapping::SlamParams{}.tracker.min_inliers);
+  const mapping::SlamParams defaults;
+  EXPECT_EQ(p.tracker.min_inliers, defaults.tracker.min_inliers);
   // The printed form reads back to the same values.
   EXPECT_EQ(formatSlamParams(parseSlamParams(formatSlamParams(p))), formatSlamParams(p));
-  EXPECT_EQ(formatSlamParams(parseSlamParams("")), formatSlamParams(mapping::SlamParams{}));
+  EXPECT_EQ(formatSlamParams(parseSlamParams("")), formatSlamParams(defaults));
+}
+
+TEST(SlamParamsIo, LoopClosureSectionsAndPlaceRecognition) {
+  const auto p = parseSlamParams(
+      "loop_correction:\n  mode: se3\n  covisibility_min_shared_points: 50\n"
+      "loop_closure:\n  enabled: false\n  relocalisation_min_coverage: 0.4\n"
+      "loop_verification:\n  min_final_inliers: 60\n"
+      "place_recognition:\n  min_consistent_queries: 2\n  geometry:\n    min_inliers: 45\n");
+  EXPECT_EQ(p.mapper.loop_correction.graph.mode, loop::PoseGraphMode::kSE3);
+  EXPECT_EQ(p.mapper.loop_correction.covisibility_min_shared_points, 50);
+  EXPECT_FALSE(p.loop.enabled);
+  EXPECT_DOUBLE_EQ(p.loop.relocalisation_geometry.min_coverage, 0.4);
+  EXPECT_EQ(p.loop.verification.min_final_inliers, 60);
+  EXPECT_EQ(p.loop.recognition.min_consistent_queries, 2);
+  EXPECT_EQ(p.loop.recognition.geometry.min_inliers, 45);
+  EXPECT_THROW(parseSlamParams("place_recognition:\n  min_inliers: 45\n"), std::runtime_error);
+  EXPECT_THROW(parseSlamParams("loop_correction:\n  mode: se2\n"), std::runtime_error);
+  EXPECT_THROW(parseSlamParams("loop_verification:\n  min_scale: 2.0\n"), std::runtime_error);
 }
 
 TEST(SlamParamsIo, RefusesTyposAndBadValues) {

@@ -75,9 +75,23 @@ struct LoopConstraintResult {
   LoopConstraint constraint;
 };
 
-/// Estimates the constraint. Bad input (non-finite values, focal length <= 0) throws
-/// std::invalid_argument; too little support gives success = false with the reason.
+/// Estimates the constraint: estimateLoopPose, then estimateLoopScale. Bad input (non-finite
+/// values, focal length <= 0) throws std::invalid_argument; too little support gives
+/// success = false with the reason.
 LoopConstraintResult estimateLoopConstraint(const LoopConstraintInput& input,
                                             const LoopConstraintParams& params);
+
+/// The 6-DoF part alone (input.point_pairs unused): P3P RANSAC and the robust refinement. On
+/// success constraint.T_current_loop, num_matches, num_inliers and rmse_px are set; `inlier`
+/// (optional) receives one flag per match.
+LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
+                                      const LoopConstraintParams& params,
+                                      std::vector<bool>* inlier = nullptr);
+
+/// The scale part: the median of |p^c| / |T_cl p^l| over the pairs in front of both cameras.
+/// Fills scale, S_current_loop and num_scale_pairs of `constraint` (T_current_loop must be set);
+/// returns false with `reason` when fewer than min_scale_pairs pairs are usable.
+bool estimateLoopScale(const std::vector<Match3D3D>& pairs, const LoopConstraintParams& params,
+                       LoopConstraint* constraint, std::string* reason);
 
 }  // namespace scale_drift_slam::loop

@@ -84,6 +84,14 @@ class PlaceRecognizer {
   PlaceQueryResult queryAndAdd(map::KeyframeId id, double timestamp, KeyframeAppearance appearance,
                                const std::unordered_set<map::KeyframeId>& excluded = {});
 
+  /// For relocalisation: the places among all keyframes added so far that look like
+  /// `appearance` (islands scoring at least min_normalized_score of the best), best first, at most
+  /// `max_candidates`, each checked with `geometry` (see LoopCandidate::geometry). No keyframe is
+  /// excluded and the consistency bookkeeping of query() is untouched. Empty until the vocabulary
+  /// is ready.
+  std::vector<LoopCandidate> findPlaces(const KeyframeAppearance& appearance, int max_candidates,
+                                        const GeometricCheckParams& geometry) const;
+
   /// Tells that the loop accepted at `query_id` failed metric verification: it no longer
   /// suppresses later candidates as its continuation.
   void reportLoopRejected(map::KeyframeId query_id);
@@ -130,8 +138,8 @@ class PlaceRecognizer {
                                   const std::unordered_set<map::KeyframeId>& excluded,
                                   PlaceQueryResult& result) const;
   LoopCandidate checkIsland(const Island& island, double reference,
-                            const KeyframeAppearance& appearance,
-                            const FeatureGroups& groups) const;
+                            const KeyframeAppearance& appearance, const FeatureGroups& groups,
+                            const GeometricCheckParams& geometry) const;
   void decide(std::size_t query_position, map::KeyframeId query_id,
               const std::vector<Island>& checked, PlaceQueryResult& result);
 

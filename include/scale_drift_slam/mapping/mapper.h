@@ -1,40 +1,88 @@
 #pragma once
 // The back-end's owner of the global map (paper/ALGORITHM.md, "Back-end: sliding-window bundle
-// adjustment"): takes the tracker's keyframe messages, adds keyframes, new points and their
-// observations to the map, runs the sliding-window BA (window_bundle_adjustment.h) and returns
-// the corrections as a map::MapUpdate for the tracker. Runs on the mapping thread (offline) or
-// in the mapping node; owns the map::Map; nothing else writes to it.
+// adjustment" and "Loop closure correction"): takes the tracker's keyframe messages, adds
+// keyframes, new points and their observations to the map, runs the sliding-window BA
+// (window_bundle_adjustment.h) and returns the corrections as a map::MapUpdate for the tracker.
+// A verified loop constraint from the loop closer is applied by closeLoop: the Sim(3) (or, for
+// comparison, SE(3)) pose graph over all keyframes, the point correction through the reference
+// keyframes and a structure-only BA. Runs on the mapping thread (offline) or in the mapping node;
+// owns the map::Map; nothing else writes to it.
 
+#include <cstdint>
+#include <string>
 #include <vector>
 
+#include "scale_drift_slam/loop/loop_constraint.h"
+#include "scale_drift_slam/loop/pose_graph.h"
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/map/map.h"
+#include "scale_drift_slam/map/map_update.h"
+#include "scale_drift_slam/mapping/structure_only_ba.h"
 #include "scale_drift_slam/mapping/window_bundle_adjustment.h"
 
 namespace scale_drift_slam::mapping {
 
+/// How a loop constraint corrects the map.
+struct LoopCorrectionParams {
+  /// The graph's mode (sim3: the paper; se3: the baseline that cannot correct scale) and solver.
+  loop::PoseGraphOptions graph;
+  /// Co-visibility edges join keyframes sharing at least this many points (0: none).
+  int covisibility_min_shared_points = 30;
+  /// Weight of a loop edge's information relative to an odometry edge's (identity).
+  double loop_edge_weight = 1.0;
+  StructureOnlyBAOptions structure;
+  /// Throws std::invalid_argument naming the first bad value.
+  void validate() const;
+};
+
 struct MapperParams {
   WindowBundleAdjustmentParams window;
   bool run_window_ba = true;  ///< Off: keyframes are only collected (for tests and debugging).
+  LoopCorrectionParams loop_correction;
   void validate() const;
+};
+
+/// What one loop correction did.
+struct LoopCorrectionStatistics {
+  bool applied = false;
+  std::string reason;  ///< Why not, when not applied.
+  loop::LoopConstraint constraint;
+  std::size_t vertices = 0, loop_edges = 0, covisibility_edges = 0;
+  int graph_iterations = 0;
+  double graph_initial_chi2 = 0.0, graph_final_chi2 = 0.0;
+  /// Scale of the correction at the current keyframe (1 for SE(3)).
+  double current_correction_scale = 1.0;
+  double graph_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  ReprojectionStats reprojection_before, reprojection_after;
 };
 
 class Mapper {
  public:
   Mapper(const MapperParams& params, double focal_length_px);
 
-  /// Adds the keyframe (observations of points the map does not know are skipped), runs the
-  /// window BA and returns the correction of the window's poses and points. `statistics`, when
-  /// given, receives the BA's figures (time_ms = 0 when it did not run).
-  map::MapUpdate addKeyframe(const map::KeyframeMessage& message,
-                             BundleStatistics* statistics = nullptr);
+  /// Adds the keyframe (brought into the current world frame when it was made before a loop
+  /// correction; observations of points the map does not know are skipped), runs the window BA
+  /// and returns the correction of the window's poses and points. `statistics`, when given,
+  /// receives the BA's figures (time_ms = 0 when it did not run).
+  map::MapUpdate addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics = nullptr);
+
+  /// Applies a verified loop constraint: the pose graph over all keyframes (consecutive and
+  /// co-visibility edges from the current estimates, every loop edge so far), the point and
+  /// keyframe correction, structure-only BA. Returns the update for the tracker and the loop
+  /// closer (every pose and point, the per-keyframe corrections). A constraint naming a keyframe
+  /// the map does not hold is not applied (statistics->reason; the update is then empty).
+  map::MapUpdate closeLoop(const loop::LoopConstraint& constraint,
+                           LoopCorrectionStatistics* statistics = nullptr);
 
   const map::Map& map() const { return map_; }
+  const std::vector<loop::PoseGraphEdge>& loopEdges() const { return loop_edges_; }
 
  private:
   MapperParams params_;
   double focal_length_px_;
   map::Map map_;
+  std::vector<loop::PoseGraphEdge> loop_edges_;
+  map::CorrectionHistory corrections_;
 };
 
 }  // namespace scale_drift_slam::mapping

@@ -1,17 +1,25 @@
 #pragma once
-// The whole SLAM in one process, as run_sequence and the end-to-end tests use it: the tracking
-// runs on the caller's thread (processFrame), the mapper on its own thread, joined by two
-// map::MessageQueues (keyframes out, map updates back), exactly the data flow of the ROS nodes.
-// Map updates are applied at the start of the next frame, so tracking never waits for the window
-// BA. With `mapping_thread = false` the mapper runs inline after each keyframe (deterministic,
-// for tests). Owns the Tracker, the Mapper and the thread.
+// The whole SLAM in one process, as run_sequence and the end-to-end tests use it, with exactly the
+// data flow of the ROS nodes: the tracking runs on the caller's thread (processFrame), the mapper
+// and the loop closer each on their own thread, joined by map::MessageQueues:
+//   tracker -> mapper:       keyframes                  mapper -> tracker, loop closer: map updates
+//   tracker -> loop closer:  keyframes, relocalisation  loop closer -> mapper: loop constraints
+//   loop closer -> tracker:  relocalisation answers
+// Whatever arrives for the tracker is applied at the start of the next frame, so tracking never
+// waits for the window BA, a loop correction or a relocalisation. With `mapping_thread = false`
+// the mapper and the loop closer run inline after each frame (deterministic, for tests).
+// Owns the Tracker, the Mapper, the LoopCloser, the queues and the threads.
 
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/loop/loop_closer.h"
+#include "scale_drift_slam/map/corrected_trajectory.h"
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/map/message_queue.h"
 #include "scale_drift_slam/mapping/mapper.h"
@@ -22,8 +30,17 @@ namespace scale_drift_slam::mapping {
 struct SlamParams {
   tracking::TrackerParams tracker;
   MapperParams mapper;
-  bool mapping_thread = true;
+  loop::LoopCloserParams loop;
+  bool mapping_thread = true;  ///< Mapper and loop closer on their own threads.
   void validate() const;
+};
+
+/// Figures of the background work; complete after finish().
+struct BackgroundTimes {
+  std::vector<double> window_ba_ms;          ///< Per keyframe.
+  std::vector<double> place_recognition_ms;  ///< Per keyframe: ORB extraction and query.
+  std::vector<double> verification_ms;       ///< Per verified candidate.
+  std::vector<double> relocalisation_ms;     ///< Per request.
 };
 
 class SlamSystem {
@@ -33,30 +50,53 @@ class SlamSystem {
   SlamSystem(const SlamSystem&) = delete;
   SlamSystem& operator=(const SlamSystem&) = delete;
 
-  /// Applies the map updates that arrived, tracks the frame, hands new keyframes to the mapper.
+  /// Applies what arrived for the tracker, tracks the frame, hands keyframes and relocalisation
+  /// requests on.
   tracking::FrameResult processFrame(double timestamp, const cv::Mat& image,
                                      tracking::PixelEncoding encoding);
-  /// Lets the mapper finish the queued keyframes and stops its thread. Idempotent.
+  /// Lets the mapper and the loop closer finish their queues, stops the threads and applies the
+  /// last updates to the trajectory. Idempotent.
   void finish();
 
-  /// The mapper's map; only after finish() (or without a mapping thread).
+  /// The mapper's map; only after finish() (or without threads).
   const map::Map& map() const { return mapper_.map(); }
   const tracking::Tracker& tracker() const { return tracker_; }
-  /// Window BA time per keyframe (ms); complete after finish().
-  std::vector<double> windowBaTimesMs() const;
+  /// Every tracked frame, corrected by the loop closures applied so far.
+  const map::CorrectedTrajectory& trajectory() const { return trajectory_; }
+  /// The loops the loop closer verified, as the mapper applied (or refused) them.
+  std::vector<LoopCorrectionStatistics> loops() const;
+  BackgroundTimes backgroundTimes() const;
+  int relocalisations() const;
+  /// Log lines of the background threads (loops found or refused, relocalisation answers) since
+  /// the last call.
+  std::vector<std::string> takeLog();
 
  private:
-  void mappingLoop();
-  void runMapper(const map::KeyframeMessage& message);
+  using MapperInput = std::variant<map::KeyframeMessage, loop::LoopConstraint>;
+  using LoopInput = std::variant<map::KeyframeMessage, map::MapUpdate, map::RelocalisationRequest>;
+  using TrackerInput = std::variant<map::MapUpdate, map::RelocalisationAnswer>;
+
+  void drainTrackerInbox();
+  void runInline();
+  void handle(MapperInput input);
+  void handle(LoopInput input);
+  void publishUpdate(map::MapUpdate update);
+  void log(std::string line);
 
   SlamParams params_;
   tracking::Tracker tracker_;
   Mapper mapper_;
-  map::MessageQueue<map::KeyframeMessage> keyframes_;
-  map::MessageQueue<map::MapUpdate> updates_;
-  mutable std::mutex times_mutex_;
-  std::vector<double> window_ba_ms_;
-  std::thread thread_;
+  loop::LoopCloser loop_closer_;
+  map::CorrectedTrajectory trajectory_;
+  map::MessageQueue<MapperInput> mapper_inbox_;
+  map::MessageQueue<LoopInput> loop_inbox_;
+  map::MessageQueue<TrackerInput> tracker_inbox_;
+  mutable std::mutex record_mutex_;  ///< Guards the records below (written by the threads).
+  std::vector<LoopCorrectionStatistics> loops_;
+  BackgroundTimes times_;
+  std::vector<std::string> log_;
+  int relocalisations_ = 0;
+  std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };
 
