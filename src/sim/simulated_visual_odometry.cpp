@@ -137,7 +137,22 @@ void SimulatedVisualOdometry::processFrame(std::size_t frame,
   frame_poses_.push_back(pose);
   updateFilters(measurements, pose);
   const double depth = sceneDepth(pose, tracked);
-  if (keyframeDue(pose, depth)) addKeyframe(frame, measurements, tracked, pose, depth);
+  if (keyframeDue(pose, depth)) {
+    addKeyframe(frame, measurements, tracked, pose, depth);
+    frame_records_.push_back({keyframes_.size() - 1, geometry::SE3()});
+  } else {
+    const geometry::SE3& T_kf_world = map_.keyframe(keyframes_.back().id).T_kf_world;
+    frame_records_.push_back({keyframes_.size() - 1, pose * T_kf_world.inverse()});
+  }
+}
+
+std::vector<geometry::SE3> SimulatedVisualOdometry::framePosesThroughKeyframes() const {
+  std::vector<geometry::SE3> poses;
+  poses.reserve(frame_records_.size());
+  for (const FrameRecord& record : frame_records_) {
+    poses.push_back(record.T_frame_kf * map_.keyframe(keyframes_[record.keyframe].id).T_kf_world);
+  }
+  return poses;
 }
 
 void SimulatedVisualOdometry::addKeyframe(std::size_t frame,
