@@ -14,7 +14,7 @@ CircleExperimentParams::CircleExperimentParams() {
   // The map points at the loop keyframe carry the whole drift of the early map plus 1 px of
   // noise per observation: 6 px keeps every true match of a 1.2 px run an inlier, and no false
   // match exists (data association is given).
-  loop.ransac_threshold_px = 6.0;
+  loop.constraint.ransac_threshold_px = 6.0;
 }
 
 void CircleExperimentParams::validate() const {

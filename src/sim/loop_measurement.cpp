@@ -1,8 +1,11 @@
 #include "scale_drift_slam/sim/loop_measurement.h"
 
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+
+#include "scale_drift_slam/mapping/structure_only_ba.h"
 
 namespace scale_drift_slam::sim {
 
@@ -13,38 +16,80 @@ void LoopDetectionParams::validate() const {
   if (min_shared_points < 4) fail("min_shared_points must be >= 4");
   if (min_keyframe_gap < 1) fail("min_keyframe_gap must be >= 1");
   if (cooldown_keyframes < 0) fail("cooldown_keyframes must be >= 0");
+  measurement.validate();
+}
+
+void LoopMeasurementParams::validate() const {
   constraint.validate();
+  if (structure_keyframes < 0) {
+    throw std::invalid_argument("loop measurement: structure_keyframes must be >= 0");
+  }
+}
+
+std::unordered_map<int, Eigen::Vector3d> localStructure(const SimulatedVisualOdometry& vo,
+                                                        std::size_t k, int radius,
+                                                        double focal_length_px) {
+  const map::Map& map = vo.map();
+  const auto& keyframes = vo.keyframes();
+  const map::Keyframe& kf = map.keyframe(keyframes.at(k).id);
+  // Keyframe ids are indices into keyframes() (SimulatedVisualOdometry numbers them so).
+  auto near = [&](map::KeyframeId id) {
+    return std::abs(static_cast<long>(id) - static_cast<long>(k)) <= radius;
+  };
+  mapping::StructureOnlyProblem problem;
+  std::unordered_map<map::KeyframeId, std::size_t> pose_index;
+  std::vector<int> sim_ids;
+  for (const map::Observation& o : kf.observations) {
+    const map::MapPoint& point = map.point(o.point_id);
+    problem.first_observation.push_back(problem.observations.size());
+    problem.points.push_back(point.p_world);
+    sim_ids.push_back(vo.simPointOf(o.point_id));
+    if (radius == 0) continue;
+    for (map::KeyframeId id : point.observed_by) {
+      if (!near(id)) continue;
+      const auto [entry, inserted] = pose_index.try_emplace(id, problem.T_cam_world.size());
+      if (inserted) problem.T_cam_world.push_back(map.keyframe(id).T_kf_world);
+      for (const map::Observation& other : map.keyframe(id).observations) {
+        if (other.point_id == o.point_id) problem.observations.push_back({entry->second, other.xy});
+      }
+    }
+  }
+  problem.first_observation.push_back(problem.observations.size());
+  if (radius > 0) {
+    mapping::refineStructure(problem, Eigen::Vector2d::Constant(focal_length_px),
+                             mapping::StructureOnlyBAOptions());
+  }
+  std::unordered_map<int, Eigen::Vector3d> structure;
+  for (std::size_t i = 0; i < sim_ids.size(); ++i)
+    structure[sim_ids[i]] = kf.T_kf_world * problem.points[i];
+  return structure;
 }
 
 loop::LoopConstraintResult measureLoop(const SimulatedVisualOdometry& vo, std::size_t current,
                                        std::size_t loop, double focal_length_px,
-                                       const loop::LoopConstraintParams& params) {
+                                       const LoopMeasurementParams& params) {
+  params.validate();
   if (current >= vo.keyframes().size() || loop >= vo.keyframes().size()) {
     throw std::out_of_range("measureLoop: keyframe index out of range");
   }
-  const map::Map& map = vo.map();
   const KeyframeRecord& c_record = vo.keyframes()[current];
-  const map::Keyframe& c = map.keyframe(c_record.id);
-  const map::Keyframe& l = map.keyframe(vo.keyframes()[loop].id);
-  // The loop keyframe's points by simulated point, in its camera frame.
-  std::unordered_map<int, Eigen::Vector3d> loop_points;
-  for (const map::Observation& o : l.observations) {
-    loop_points[vo.simPointOf(o.point_id)] = l.T_kf_world * map.point(o.point_id).p_world;
-  }
+  const std::unordered_map<int, Eigen::Vector3d> loop_points =
+      localStructure(vo, loop, params.structure_keyframes, focal_length_px);
+  const std::unordered_map<int, Eigen::Vector3d> current_points =
+      localStructure(vo, current, params.structure_keyframes, focal_length_px);
   loop::LoopConstraintInput input;
-  input.current_id = c.id;
-  input.loop_id = l.id;
+  input.current_id = c_record.id;
+  input.loop_id = vo.keyframes()[loop].id;
   input.focal_length_px = focal_length_px;
   for (const auto& [sim_id, xy] : c_record.measurements) {
     const auto it = loop_points.find(sim_id);
     if (it != loop_points.end()) input.matches.push_back({xy, it->second});
   }
-  for (const map::Observation& o : c.observations) {
-    const auto it = loop_points.find(vo.simPointOf(o.point_id));
-    if (it == loop_points.end()) continue;
-    input.point_pairs.push_back({c.T_kf_world * map.point(o.point_id).p_world, it->second});
+  for (const auto& [sim_id, p_current] : current_points) {
+    const auto it = loop_points.find(sim_id);
+    if (it != loop_points.end()) input.point_pairs.push_back({p_current, it->second});
   }
-  return loop::estimateLoopConstraint(input, params);
+  return loop::estimateLoopConstraint(input, params.constraint);
 }
 
 std::vector<loop::LoopConstraint> detectLoops(const SimulatedVisualOdometry& vo,
@@ -82,7 +127,7 @@ std::vector<loop::LoopConstraint> detectLoops(const SimulatedVisualOdometry& vo,
     }
     if (best_votes < params.min_shared_points) continue;
     const loop::LoopConstraintResult result =
-        measureLoop(vo, c, best, focal_length_px, params.constraint);
+        measureLoop(vo, c, best, focal_length_px, params.measurement);
     if (!result.success) continue;
     loops.push_back(result.constraint);
     next_allowed = c + params.cooldown_keyframes;

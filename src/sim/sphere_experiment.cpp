@@ -10,7 +10,7 @@ namespace scale_drift_slam::sim {
 
 SphereExperimentParams::SphereExperimentParams() {
   // As for the circle (sim/circle_experiment.cpp): the old map points carry the drift.
-  detection.constraint.ransac_threshold_px = 6.0;
+  detection.measurement.constraint.ransac_threshold_px = 6.0;
 }
 
 void SphereExperimentParams::validate() const {

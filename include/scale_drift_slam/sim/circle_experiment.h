@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "scale_drift_slam/loop/loop_constraint.h"
+#include "scale_drift_slam/sim/loop_measurement.h"
 #include "scale_drift_slam/sim/simulated_visual_odometry.h"
 #include "scale_drift_slam/sim/simulated_world.h"
 #include "scale_drift_slam/sim/simulation_run.h"
@@ -22,7 +22,7 @@ struct CircleExperimentParams {
   double noise_px = 1.0;  ///< Gaussian pixel noise (standard deviation per coordinate).
   SimulatedVoParams vo;
   /// The loop measurement (P3P RANSAC + refinement + median scale); its threshold is in pixels.
-  loop::LoopConstraintParams loop;
+  LoopMeasurementParams loop;
   CorrectionOptions correction;
   CircleExperimentParams();
   /// Throws std::invalid_argument naming the first bad value.
