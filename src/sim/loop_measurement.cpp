@@ -1,5 +1,6 @@
 #include "scale_drift_slam/sim/loop_measurement.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -23,6 +24,10 @@ void LoopMeasurementParams::validate() const {
   constraint.validate();
   if (structure_keyframes < 0) {
     throw std::invalid_argument("loop measurement: structure_keyframes must be >= 0");
+  }
+  if (depth_neighbours < 1) throw std::invalid_argument("loop measurement: depth_neighbours >= 1");
+  if (!(depth_radius_px > 0.0)) {
+    throw std::invalid_argument("loop measurement: depth_radius_px must be > 0");
   }
 }
 
@@ -65,6 +70,34 @@ std::unordered_map<int, Eigen::Vector3d> localStructure(const SimulatedVisualOdo
   return structure;
 }
 
+namespace {
+
+/// The depth (z) of a feature at `xy` by k-nearest-neighbour regression on the points a keyframe
+/// holds (in its camera frame): the median z of the nearest `depth_neighbours` whose projections
+/// lie within `depth_radius_px`; 0 when fewer than that many do (paper/ALGORITHM.md, "Loop
+/// closure detection", steps 2 and 4).
+double regressedDepth(const std::unordered_map<int, Eigen::Vector3d>& points,
+                      const Eigen::Vector2d& xy, double focal_length_px,
+                      const LoopMeasurementParams& params) {
+  std::vector<std::pair<double, double>> neighbours;  // (pixel distance, z)
+  for (const auto& entry : points) {
+    const Eigen::Vector3d& p = entry.second;
+    if (!(p.z() > 0.0)) continue;
+    const double distance = focal_length_px * (p.head<2>() / p.z() - xy).norm();
+    if (distance <= params.depth_radius_px) neighbours.emplace_back(distance, p.z());
+  }
+  const std::size_t k = static_cast<std::size_t>(params.depth_neighbours);
+  if (neighbours.size() < k) return 0.0;
+  std::partial_sort(neighbours.begin(), neighbours.begin() + k, neighbours.end());
+  std::vector<double> depths;
+  for (std::size_t i = 0; i < k; ++i)
+    depths.push_back(neighbours[i].second);
+  std::nth_element(depths.begin(), depths.begin() + k / 2, depths.end());
+  return depths[k / 2];
+}
+
+}  // namespace
+
 loop::LoopConstraintResult measureLoop(const SimulatedVisualOdometry& vo, std::size_t current,
                                        std::size_t loop, double focal_length_px,
                                        const LoopMeasurementParams& params) {
@@ -85,9 +118,18 @@ loop::LoopConstraintResult measureLoop(const SimulatedVisualOdometry& vo, std::s
     const auto it = loop_points.find(sim_id);
     if (it != loop_points.end()) input.matches.push_back({xy, it->second});
   }
-  for (const auto& [sim_id, p_current] : current_points) {
-    const auto it = loop_points.find(sim_id);
-    if (it != loop_points.end()) input.point_pairs.push_back({p_current, it->second});
+  // 3D-3D pairs: the same point in both maps; where the current map does not hold a matched point
+  // (yet), the feature's depth from its neighbours in the current keyframe (paper, step 4).
+  for (const auto& [sim_id, xy] : c_record.measurements) {
+    const auto loop_point = loop_points.find(sim_id);
+    if (loop_point == loop_points.end()) continue;
+    const auto current_point = current_points.find(sim_id);
+    if (current_point != current_points.end()) {
+      input.point_pairs.push_back({current_point->second, loop_point->second});
+      continue;
+    }
+    const double depth = regressedDepth(current_points, xy, focal_length_px, params);
+    if (depth > 0.0) input.point_pairs.push_back({depth * xy.homogeneous(), loop_point->second});
   }
   return loop::estimateLoopConstraint(input, params.constraint);
 }

@@ -36,6 +36,20 @@ void SimulatedVoParams::validate() const {
   if (!(initial_scene_depth > 0.0)) fail("initial_scene_depth must be > 0");
 }
 
+SimulatedVoParams voParamsForNoise(SimulatedVoParams params, double noise_px) {
+  if (!(noise_px >= 0.0) || !std::isfinite(noise_px)) {
+    throw std::invalid_argument("simulated visual odometry: the noise must be >= 0 pixels");
+  }
+  params.filter.pixel_sigma_px = std::max(noise_px, 0.5);
+  const double factor = std::max(noise_px, 1.0);
+  params.filter.max_promotion_error_px *= factor;
+  params.motion.huber_width_px *= factor;
+  params.motion.inlier_threshold_px *= factor;
+  params.window.huber_width_px *= factor;
+  params.window.inlier_threshold_px *= factor;
+  return params;
+}
+
 SimulatedVisualOdometry::SimulatedVisualOdometry(const PinholeCamera& camera,
                                                  const SimulatedVoParams& params)
     : camera_(camera), params_(params) {

@@ -29,8 +29,7 @@ SimulationRun runSphereExperiment(const SphereExperimentParams& params, std::uin
   const double cpu_start = processCpuSeconds();
   std::mt19937 rng(seed);
   const SimulatedWorld world = makeSphereWorld(params.world, rng);
-  SimulatedVoParams vo_params = params.vo;
-  vo_params.filter.pixel_sigma_px = std::max(params.noise_px, 0.5);
+  const SimulatedVoParams vo_params = voParamsForNoise(params.vo, params.noise_px);
   SimulatedVisualOdometry vo(world.camera, vo_params);
   for (std::size_t i = 0; i < world.T_cam_world.size(); ++i)
     vo.processFrame(i, measureFrame(world, i, params.noise_px, rng), world.T_cam_world[i]);

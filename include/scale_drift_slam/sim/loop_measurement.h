@@ -24,6 +24,10 @@ struct LoopMeasurementParams {
   /// many before or after it (structure-only BA, poses fixed); 0 uses the map positions as they
   /// are.
   int structure_keyframes = 4;
+  /// A matched feature whose point the current keyframe does not hold gets its depth from the
+  /// median of its nearest this many points of the current keyframe, within depth_radius_px.
+  int depth_neighbours = 3;
+  double depth_radius_px = 20.0;
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -39,7 +43,8 @@ struct LoopDetectionParams {
 
 /// The constraint between keyframes `current` and `loop` (indices into vo.keyframes()):
 /// 2D-3D matches = features of `current` whose point `loop` observes in the map (in `loop`'s
-/// camera frame); 3D-3D pairs = those points that `current` also observes as its own map points.
+/// camera frame); 3D-3D pairs = those points as `current` holds them, or, where it does not hold
+/// one, the feature at the depth its neighbours in `current` give (k-nearest-neighbour regression).
 loop::LoopConstraintResult measureLoop(const SimulatedVisualOdometry& vo, std::size_t current,
                                        std::size_t loop, double focal_length_px,
                                        const LoopMeasurementParams& params);
