@@ -4,6 +4,8 @@
 // multi-loop run). Fixed seeds; the values measured here are in the comments.
 
 #include <cmath>
+#include <map>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -76,6 +78,39 @@ TEST(SphereExperiment, DetectsTheLoopsAndSim3BeatsSE3) {
   EXPECT_LT(run.sim3.error.rmse, 0.5 * run.se3.error.rmse);
   EXPECT_LT(run.sim3.error.rmse, 0.3);
   EXPECT_LT(run.sim3.error.rmse, run.error_before.rmse);
+}
+
+TEST(SimulationRun, FramesFollowTheCorrectionOfTheirKeyframes) {
+  // A noisy VO on an arc; then every keyframe gets the same similarity G (world -> world'):
+  // S'_kf_world' = S_kf_world G^-1. Every frame, keyframe or not, must move by G exactly.
+  std::mt19937 rng(5);
+  CircleWorldParams world_params;
+  world_params.num_poses = 120;
+  world_params.arc_fraction = 120.0 / 720.0;
+  const SimulatedWorld world = makeCircleWorld(world_params, rng);
+  SimulatedVisualOdometry vo(world.camera, voParamsForNoise(SimulatedVoParams(), 1.0));
+  for (std::size_t i = 0; i < world.T_cam_world.size(); ++i)
+    vo.processFrame(i, measureFrame(world, i, 1.0, rng), world.T_cam_world[i]);
+  ASSERT_LT(vo.keyframes().size(), 100u);  // some frames are not keyframes
+  geometry::Sim3::Tangent g;
+  g << 0.1, -0.2, 0.3, std::log(2.5), 1.0, -2.0, 0.5;
+  const geometry::Sim3 G = geometry::Sim3::exp(g);
+  std::map<map::KeyframeId, geometry::Sim3> unchanged, moved;
+  for (const auto& [id, kf] : vo.map().keyframes()) {
+    unchanged[id] = geometry::Sim3(kf.T_kf_world);
+    moved[id] = geometry::Sim3(kf.T_kf_world) * G.inverse();
+  }
+  const std::vector<geometry::SE3> before = vo.framePosesThroughKeyframes();
+  const std::vector<geometry::SE3> same = correctedFramePoses(vo, unchanged);
+  const std::vector<geometry::SE3> after = correctedFramePoses(vo, moved);
+  ASSERT_EQ(after.size(), world.T_cam_world.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    const geometry::SE3 T_world_cam = before[i].inverse();
+    EXPECT_LT((same[i].translation() - T_world_cam.translation()).norm(), 1e-9) << i;
+    EXPECT_LT((after[i].translation() - G * T_world_cam.translation()).norm(), 1e-9) << i;
+    const Eigen::Matrix3d R_expected = G.rotationMatrix() * T_world_cam.rotationMatrix();
+    EXPECT_LT((after[i].rotationMatrix() - R_expected).norm(), 1e-9) << i;
+  }
 }
 
 TEST(SimulationExperiments, RejectBadParameters) {
