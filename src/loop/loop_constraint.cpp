@@ -104,6 +104,11 @@ LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
   const mapping::MotionOnlyResult refined =
       mapping::solveMotionOnlyBundleAdjustment(refine, refine_params);
   c.T_current_loop = refined.T_cam_world;
+  if (!c.T_current_loop.translation().allFinite() ||
+      !c.T_current_loop.rotation().coeffs().allFinite()) {
+    result.reason = "the refinement of the pose diverged";
+    return result;
+  }
   c.num_inliers = static_cast<int>(refined.statistics.num_inliers);
   c.rmse_px = refined.statistics.final_rmse_px;
   if (inlier) *inlier = refined.inlier;

@@ -61,26 +61,42 @@ WindowBundleInput makeWindowInput(const map::Map& map, const WindowBundleAdjustm
   input.focal_length_px = focal_length_px;
   input.map_version = map.version();
   const std::size_t n = std::min<std::size_t>(params.window_size, map.numKeyframes());
-  auto it = map.keyframes().end();
-  std::advance(it, -static_cast<long>(n));
+  auto first = map.keyframes().end();
+  std::advance(first, -static_cast<long>(n));
+  // Per point: its observations in the window and those in free window keyframes.
+  struct Count {
+    int window = 0;
+    int free = 0;
+  };
+  std::unordered_map<map::PointId, Count> counts;
+  std::size_t k = 0;
+  for (auto it = first; it != map.keyframes().end(); ++it, ++k) {
+    const bool fixed = k < static_cast<std::size_t>(params.num_fixed_keyframes);
+    for (const map::Observation& obs : it->second.observations) {
+      Count& count = counts[obs.point_id];
+      ++count.window;
+      count.free += fixed ? 0 : 1;
+    }
+  }
+  // A point that no free keyframe sees constrains no free pose: it is left out, so that it keeps
+  // the estimate its older observations gave it instead of being re-triangulated from the two
+  // fixed keyframes alone (a short baseline; it would lose that information).
   std::unordered_map<map::PointId, std::size_t> point_index;
-  std::vector<int> window_observations;  // per point
-  for (std::size_t k = 0; it != map.keyframes().end(); ++it, ++k) {
+  k = 0;
+  for (auto it = first; it != map.keyframes().end(); ++it, ++k) {
     const map::Keyframe& kf = it->second;
     input.keyframes.push_back(
         {kf.id, kf.T_kf_world, k < static_cast<std::size_t>(params.num_fixed_keyframes)});
     for (const map::Observation& obs : kf.observations) {
+      const Count& count = counts.at(obs.point_id);
+      if (count.free == 0) continue;
       auto [entry, inserted] = point_index.try_emplace(obs.point_id, input.points.size());
       if (inserted) {
-        input.points.push_back({obs.point_id, map.point(obs.point_id).p_world, false});
-        window_observations.push_back(0);
+        // Seen by a single window keyframe: fixed (it still constrains that keyframe's pose).
+        input.points.push_back({obs.point_id, map.point(obs.point_id).p_world, count.window < 2});
       }
-      ++window_observations[entry->second];
       input.observations.push_back({k, entry->second, obs.xy});
     }
-  }
-  for (std::size_t i = 0; i < input.points.size(); ++i) {
-    input.points[i].fixed = window_observations[i] < 2;
   }
   return input;
 }

@@ -36,6 +36,20 @@ void SimulatedVoParams::validate() const {
   if (!(initial_scene_depth > 0.0)) fail("initial_scene_depth must be > 0");
 }
 
+SimulatedVoParams voParamsForNoise(SimulatedVoParams params, double noise_px) {
+  if (!(noise_px >= 0.0) || !std::isfinite(noise_px)) {
+    throw std::invalid_argument("simulated visual odometry: the noise must be >= 0 pixels");
+  }
+  params.filter.pixel_sigma_px = std::max(noise_px, 0.5);
+  const double factor = std::max(noise_px, 1.0);
+  params.filter.max_promotion_error_px *= factor;
+  params.motion.huber_width_px *= factor;
+  params.motion.inlier_threshold_px *= factor;
+  params.window.huber_width_px *= factor;
+  params.window.inlier_threshold_px *= factor;
+  return params;
+}
+
 SimulatedVisualOdometry::SimulatedVisualOdometry(const PinholeCamera& camera,
                                                  const SimulatedVoParams& params)
     : camera_(camera), params_(params) {
@@ -137,7 +151,22 @@ void SimulatedVisualOdometry::processFrame(std::size_t frame,
   frame_poses_.push_back(pose);
   updateFilters(measurements, pose);
   const double depth = sceneDepth(pose, tracked);
-  if (keyframeDue(pose, depth)) addKeyframe(frame, measurements, tracked, pose, depth);
+  if (keyframeDue(pose, depth)) {
+    addKeyframe(frame, measurements, tracked, pose, depth);
+    frame_records_.push_back({keyframes_.size() - 1, geometry::SE3()});
+  } else {
+    const geometry::SE3& T_kf_world = map_.keyframe(keyframes_.back().id).T_kf_world;
+    frame_records_.push_back({keyframes_.size() - 1, pose * T_kf_world.inverse()});
+  }
+}
+
+std::vector<geometry::SE3> SimulatedVisualOdometry::framePosesThroughKeyframes() const {
+  std::vector<geometry::SE3> poses;
+  poses.reserve(frame_records_.size());
+  for (const FrameRecord& record : frame_records_) {
+    poses.push_back(record.T_frame_kf * map_.keyframe(keyframes_[record.keyframe].id).T_kf_world);
+  }
+  return poses;
 }
 
 void SimulatedVisualOdometry::addKeyframe(std::size_t frame,

@@ -2,18 +2,26 @@
 // A thin dispatcher: each subcommand parses its flags and calls the experiment in the core
 // (sim/). Add an experiment by adding an entry to experiments().
 
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/keble_map.h"
+#include "scale_drift_slam/sim/circle_experiment.h"
 #include "scale_drift_slam/sim/keble_experiment.h"
+#include "scale_drift_slam/sim/simulation_output.h"
+#include "scale_drift_slam/sim/sphere_experiment.h"
 
 namespace {
 
+namespace sds = scale_drift_slam;
 using scale_drift_slam::io::CommandLine;
 
 const char* const kUsage =
@@ -29,10 +37,29 @@ const char* const kUsage =
     "                               the authors capped theirs at 2)\n"
     "        --jacobians analytic|autodiff   pose-graph derivatives (default analytic)\n"
     "        --structure-iterations N        structure-only BA iterations (default 10)\n"
-    "        --covisibility N       add edges between keyframes sharing >= N points (default 0)\n";
+    "        --covisibility N       add edges between keyframes sharing >= N points (default 0)\n"
+    "  circle --out DIR        the paper's circle (Figure 3): 720 poses on a circle of radius\n"
+    "        10 m looking outwards at 5000 points on a ring of radius 11 m; visual odometry with\n"
+    "        feature filters and a window BA of 10, the loop last -> first keyframe measured from\n"
+    "        the observations, corrected with SE(3) and Sim(3). Writes truth.tum too and\n"
+    "        circle_top_view.png.\n"
+    "        --noise PX             Gaussian pixel noise (default 1.0)\n"
+    "        --poses N              poses on the circle (default 720); --points N (default 5000)\n"
+    "        --noise-sweep          every noise level of Figure 3 (0, 0.2, ..., 1.2 px) instead:\n"
+    "                               summary.json and noise_sweep.png\n"
+    "  sphere --out DIR        the paper's multi-loop run: 15000 points on a sphere of radius\n"
+    "        10 m, a downward camera on great circles at 12 m, loops detected from the simulated\n"
+    "        data association, all corrected at once. Writes sphere_top_view.png.\n"
+    "        --noise PX             Gaussian pixel noise (default 0.75)\n"
+    "        --revolutions N        great circles flown (default 6: 10 loops)\n"
+    "  circle and sphere also take:\n"
+    "        --runs N --seed S      N runs with the seeds S, S+1, ... (default 1 run, seed 1);\n"
+    "                               runs > 1 write DIR/run_NN/ and mean/median in summary.json\n"
+    "        --covisibility N       also join keyframes sharing >= N points (default 0)\n"
+    "        --loop-information W   information of the loop edges, identity times W (default 1)\n"
+    "        --max-iterations N     LM iterations of each pose graph (default 100)\n";
 
 int runKeble(const CommandLine& args) {
-  namespace sds = scale_drift_slam;
   args.rejectUnknownFlags(
       {"map", "out", "max-iterations", "jacobians", "structure-iterations", "covisibility"});
   sds::sim::KebleExperimentOptions options;
@@ -62,18 +89,135 @@ int runKeble(const CommandLine& args) {
   return 0;
 }
 
-/// The experiments by name; "circle" and "sphere" join here.
+/// The flags circle and sphere share.
+const std::set<std::string> kSimulationFlags = {
+    "out", "noise", "runs", "seed", "covisibility", "loop-information", "max-iterations"};
+
+sds::sim::CorrectionOptions correctionOptions(const CommandLine& args) {
+  sds::sim::CorrectionOptions options;
+  options.covisibility_min_shared_points = static_cast<int>(args.integer("covisibility", 0));
+  options.loop_information = args.number("loop-information", 1.0);
+  options.graph.max_iterations = static_cast<int>(args.integer("max-iterations", 100));
+  options.validate();
+  return options;
+}
+
+/// --runs and --seed: the seeds of the runs.
+std::vector<std::uint32_t> seeds(const CommandLine& args) {
+  const long runs = args.integer("runs", 1), seed = args.integer("seed", 1);
+  if (runs < 1 || runs > 1000) throw std::invalid_argument("--runs must be in 1..1000");
+  if (seed < 0 || seed > 0xFFFFFFFFL - runs) throw std::invalid_argument("--seed out of range");
+  std::vector<std::uint32_t> list;
+  for (long k = 0; k < runs; ++k)
+    list.push_back(static_cast<std::uint32_t>(seed + k));
+  return list;
+}
+
+void printRun(const sds::sim::SimulationRun& run) {
+  double scale = 1.0;
+  for (const auto& loop : run.loops) {
+    if (std::abs(std::log(loop.measured_scale)) > std::abs(std::log(scale)))
+      scale = loop.measured_scale;
+  }
+  std::printf(
+      "  %s seed %u noise %.2f px: %zu keyframes, %zu loops (largest scale change %+.1f%%); "
+      "RMSE before %.3f, SE(3) %.3f, Sim(3) %.3f; %.1f s CPU\n",
+      run.experiment.c_str(), run.seed, run.noise_px, run.keyframes, run.loops.size(),
+      100.0 * (scale - 1.0), run.error_before.rmse, run.se3.error.rmse, run.sim3.error.rmse,
+      run.total_cpu_time_s);
+}
+
+nlohmann::json commonJson(const CommandLine& args, const sds::sim::CorrectionOptions& correction,
+                          double noise) {
+  return {{"noise_px", noise},
+          {"runs", args.integer("runs", 1)},
+          {"seed", args.integer("seed", 1)},
+          {"covisibility_min_shared_points", correction.covisibility_min_shared_points},
+          {"odometry_information", correction.odometry_information},
+          {"loop_information", correction.loop_information},
+          {"pose_graph_max_iterations", correction.graph.max_iterations}};
+}
+
+int runCircle(const CommandLine& args) {
+  std::set<std::string> known = kSimulationFlags;
+  known.insert({"poses", "points", "noise-sweep"});
+  args.rejectUnknownFlags(known);
+  sds::sim::CircleExperimentParams params;
+  params.noise_px = args.number("noise", 1.0);
+  params.world.num_poses = static_cast<int>(args.integer("poses", 720));
+  params.world.num_points = static_cast<int>(args.integer("points", 5000));
+  params.correction = correctionOptions(args);
+  params.validate();
+  const std::string out = args.required("out");
+  const std::vector<std::uint32_t> run_seeds = seeds(args);
+  nlohmann::json json = commonJson(args, params.correction, params.noise_px);
+  json["poses"] = params.world.num_poses;
+  json["points"] = params.world.num_points;
+  json["window_size"] = params.vo.window.window_size;
+  if (!args.has("noise-sweep")) {
+    std::vector<sds::sim::SimulationRun> runs;
+    for (std::uint32_t seed : run_seeds) {
+      runs.push_back(sds::sim::runCircleExperiment(params, seed));
+      printRun(runs.back());
+    }
+    sds::sim::writeRuns(runs, json, out);
+    std::printf("outputs in %s\n", out.c_str());
+    return 0;
+  }
+  if (args.has("noise"))
+    throw std::invalid_argument("--noise and --noise-sweep exclude each other");
+  json.erase("noise_px");
+  std::vector<sds::sim::NoiseLevelRuns> levels;
+  for (double noise : sds::sim::paperNoiseLevels()) {
+    params.noise_px = noise;
+    levels.push_back({noise, {}});
+    for (std::uint32_t seed : run_seeds) {
+      levels.back().runs.push_back(sds::sim::runCircleExperiment(params, seed));
+      printRun(levels.back().runs.back());
+    }
+  }
+  sds::sim::writeNoiseSweep(levels, json, out);
+  std::printf("outputs in %s\n", out.c_str());
+  return 0;
+}
+
+int runSphere(const CommandLine& args) {
+  std::set<std::string> known = kSimulationFlags;
+  known.insert("revolutions");
+  args.rejectUnknownFlags(known);
+  sds::sim::SphereExperimentParams params;
+  params.noise_px = args.number("noise", 0.75);
+  params.world.revolutions = static_cast<int>(args.integer("revolutions", 6));
+  params.correction = correctionOptions(args);
+  params.validate();
+  const std::string out = args.required("out");
+  nlohmann::json json = commonJson(args, params.correction, params.noise_px);
+  json["revolutions"] = params.world.revolutions;
+  json["poses_per_revolution"] = params.world.poses_per_revolution;
+  json["points"] = params.world.num_points;
+  json["window_size"] = params.vo.window.window_size;
+  std::vector<sds::sim::SimulationRun> runs;
+  for (std::uint32_t seed : seeds(args)) {
+    runs.push_back(sds::sim::runSphereExperiment(params, seed));
+    printRun(runs.back());
+  }
+  sds::sim::writeRuns(runs, json, out);
+  std::printf("outputs in %s\n", out.c_str());
+  return 0;
+}
+
+/// The experiments by name.
 const std::map<std::string, std::function<int(const CommandLine&)>>& experiments() {
   static const std::map<std::string, std::function<int(const CommandLine&)>> table = {
-      {"keble", runKeble}};
+      {"keble", runKeble}, {"circle", runCircle}, {"sphere", runSphere}};
   return table;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return scale_drift_slam::io::runTool(argc, argv, kUsage, {}, [](const CommandLine& args) {
-    const std::string& name = args.positional(0, "EXPERIMENT (keble)");
+  return sds::io::runTool(argc, argv, kUsage, {"noise-sweep"}, [](const CommandLine& args) {
+    const std::string& name = args.positional(0, "EXPERIMENT (keble, circle, sphere)");
     const auto it = experiments().find(name);
     if (it == experiments().end()) {
       std::string known;

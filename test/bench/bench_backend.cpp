@@ -1,6 +1,6 @@
 // Back-end timings (doc/benchmarks.md, "Back-end"): the sliding-window BA at the size of the
 // issue (10 keyframes, 1500 points, ~10000 observations), motion-only BA with 300 points (both
-// solvers), and the paper's simulations (a full circle run and a sphere run).
+// solvers). The paper's simulations (a full circle run and a sphere run): bench_simulation.cpp.
 
 #include <cstdio>
 #include <random>

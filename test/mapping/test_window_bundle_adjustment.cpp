@@ -132,6 +132,41 @@ TEST(WindowBundleAdjustment, WindowTakesTheNewestKeyframesAndFixesSinglyObserved
   EXPECT_LT(result.statistics.final_rmse_px, 1.2);  // 0.5 px noise plus the fixed points' error
 }
 
+TEST(WindowBundleAdjustment, LeavesOutPointsThatOnlyTheFixedKeyframesSee) {
+  testing::Scene truth;
+  map::Map map = makeNoisyMap(14, 0.5, 0.0, &truth);
+  // The window is keyframes 104..113 with 104 and 105 fixed. Point 9997 is seen by the fixed pair
+  // only (it constrains no free pose: left out, its position untouched); 9996 by a fixed and a
+  // free keyframe (in, free).
+  const Eigen::Vector3d p(0.5, 0.2, 5.0);
+  map.addPoint({9997, p, 104, {}});
+  map.addPoint({9996, p + Eigen::Vector3d(0.1, 0.0, 0.0), 104, {}});
+  for (map::KeyframeId id : {104u, 105u}) {
+    const Eigen::Vector3d y = map.keyframe(id).T_kf_world * p;
+    map.addObservation(id, 9997, y.head<2>() / y.z());
+  }
+  for (map::KeyframeId id : {104u, 110u}) {
+    const Eigen::Vector3d y = map.keyframe(id).T_kf_world * (p + Eigen::Vector3d(0.1, 0.0, 0.0));
+    map.addObservation(id, 9996, y.head<2>() / y.z());
+  }
+  const WindowBundleInput input = makeWindowInput(map, WindowBundleAdjustmentParams(), kFocal);
+  bool found_9996 = false;
+  for (const BundlePoint& point : input.points) {
+    EXPECT_NE(point.id, 9997u);
+    if (point.id == 9996u) found_9996 = !point.fixed;
+  }
+  EXPECT_TRUE(found_9996);
+  // Every point of the window is seen by at least one free keyframe.
+  std::vector<int> free_views(input.points.size(), 0);
+  for (const BundleObservation& o : input.observations)
+    free_views[o.point_index] += input.keyframes[o.keyframe_index].fixed ? 0 : 1;
+  EXPECT_EQ(std::count(free_views.begin(), free_views.end(), 0), 0);
+  const WindowBundleResult result =
+      solveWindowBundleAdjustment(input, WindowBundleAdjustmentParams());
+  applyWindowResult(result, map);
+  EXPECT_EQ(map.point(9997).p_world, p);
+}
+
 TEST(WindowBundleAdjustment, RejectsBadInput) {
   WindowBundleAdjustmentParams params;
   params.num_fixed_keyframes = 1;

@@ -63,8 +63,8 @@ TEST(SimulatedVisualOdometry, TheMeasuredLoopScaleMatchesTheMapsDrift) {
   EXPECT_GT(vo.statistics().promoted, 10 * vo.statistics().promotions_rejected);
   const std::size_t last = vo.keyframes().size() - 1;
   EXPECT_GE(vo.keyframes()[last].frame, 715u);
-  loop::LoopConstraintParams params;
-  params.ransac_threshold_px = 6.0;
+  LoopMeasurementParams params;
+  params.constraint.ransac_threshold_px = 6.0;
   const loop::LoopConstraintResult loop =
       measureLoop(vo, last, 0, world.camera.focal_length, params);
   ASSERT_TRUE(loop.success) << loop.reason;

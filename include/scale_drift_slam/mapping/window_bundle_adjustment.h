@@ -88,9 +88,11 @@ struct WindowBundleResult {
 };
 
 /// Builds the window from the map: the newest `window_size` keyframes (by id), the two
-/// (`num_fixed_keyframes`) oldest of them fixed, every point they observe, and their
-/// observations. Points seen by fewer than two window keyframes are included but fixed (they
-/// still constrain the poses). Throws std::invalid_argument when the map has fewer keyframes
+/// (`num_fixed_keyframes`) oldest of them fixed, every point a free window keyframe observes, and
+/// their observations. Points seen by fewer than two window keyframes are included but fixed (they
+/// still constrain the poses); points seen only by the fixed keyframes are left out (they
+/// constrain no free pose, and re-triangulating them from the fixed pair alone would discard what
+/// their older observations told). Throws std::invalid_argument when the map has fewer keyframes
 /// than `num_fixed_keyframes` + 1.
 WindowBundleInput makeWindowInput(const map::Map& map, const WindowBundleAdjustmentParams& params,
                                   double focal_length_px);

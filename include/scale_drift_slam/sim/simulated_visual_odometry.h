@@ -44,6 +44,13 @@ struct SimulatedVoParams {
   void validate() const;
 };
 
+/// `params` adapted to Gaussian pixel noise of `noise_px`: the filters' measurement sigma is the
+/// noise (at least 0.5 px, so that a noise-free run still gates its updates), and the pixel
+/// thresholds, whose defaults suit noise up to 1 px (kernel widths, inlier gates, the promotion
+/// gate), grow in proportion to the noise above 1 px. Without that, 1.2 px noise rejects ~13 % of
+/// good promotions at the 3 px gate and the map can starve.
+SimulatedVoParams voParamsForNoise(SimulatedVoParams params, double noise_px);
+
 struct SimulatedVoStatistics {
   std::size_t frames = 0;
   std::size_t lost_frames = 0;  ///< Frames with too few tracked points.
@@ -63,6 +70,15 @@ struct KeyframeRecord {
   std::unordered_map<int, Eigen::Vector2d> measurements;
 };
 
+/// How a frame hangs off the keyframe map: its reference keyframe (the newest keyframe when the
+/// frame was tracked; a keyframe is its own reference) and the pose relative to it at that time,
+/// T_frame_kf = T_frame_world T_kf_world^-1. A frame follows its keyframe when the keyframe moves
+/// later (window BA, loop correction): T_frame_world = T_frame_kf T_kf_world.
+struct FrameRecord {
+  std::size_t keyframe = 0;  ///< Index into SimulatedVisualOdometry::keyframes().
+  geometry::SE3 T_frame_kf;
+};
+
 class SimulatedVisualOdometry {
  public:
   SimulatedVisualOdometry(const PinholeCamera& camera, const SimulatedVoParams& params);
@@ -78,6 +94,10 @@ class SimulatedVisualOdometry {
   int simPointOf(map::PointId id) const { return point_to_sim_.at(id); }
   /// The estimated pose of every processed frame (keyframes: after window BA).
   const std::vector<geometry::SE3>& framePoses() const { return frame_poses_; }
+  /// Per processed frame: its reference keyframe and relative pose (see FrameRecord).
+  const std::vector<FrameRecord>& frameRecords() const { return frame_records_; }
+  /// Every frame's pose through its reference keyframe's current pose in the map.
+  std::vector<geometry::SE3> framePosesThroughKeyframes() const;
   const SimulatedVoStatistics& statistics() const { return stats_; }
 
  private:
@@ -104,6 +124,7 @@ class SimulatedVisualOdometry {
   map::Map map_;
   std::vector<KeyframeRecord> keyframes_;
   std::vector<geometry::SE3> frame_poses_;
+  std::vector<FrameRecord> frame_records_;
   std::unordered_map<int, map::PointId> sim_to_point_;  ///< The newest map point of a sim point.
   std::unordered_map<map::PointId, int> point_to_sim_;
   std::unordered_map<map::PointId, std::size_t> last_seen_;        ///< Index into keyframes_.
