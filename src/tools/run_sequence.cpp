@@ -128,6 +128,8 @@ nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
     const loop::LoopConstraint& c = loop.constraint;
     loops.push_back({{"current_keyframe", c.current_id},
                      {"loop_keyframe", c.loop_id},
+                     {"current_stamp", slam.map().keyframe(c.current_id).timestamp},
+                     {"loop_stamp", slam.map().keyframe(c.loop_id).timestamp},
                      {"inliers", c.num_inliers},
                      {"matches", c.num_matches},
                      {"scale", c.scale},
