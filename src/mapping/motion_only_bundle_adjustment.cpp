@@ -180,7 +180,7 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   double initial_sq = 0.0, final_sq = 0.0;
   for (std::size_t i = 0; i < input.observations.size(); ++i) {
     const PoseObservation& o = input.observations[i];
-    Eigen::Vector2d r0, r1;
+    Eigen::Vector2d r0 = Eigen::Vector2d::Zero(), r1 = Eigen::Vector2d::Zero();
     const bool ok0 = internal::reprojectionResidual(input.T_cam_world_guess, o.p_world, o.xy,
                                                     input.focal_length_px, &r0, nullptr, nullptr);
     const bool ok1 = internal::reprojectionResidual(result.T_cam_world, o.p_world, o.xy,

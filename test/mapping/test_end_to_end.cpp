@@ -39,7 +39,8 @@ TEST_P(EndToEnd, TracksEveryFrameWithinTheErrorBound) {
   sequence.realism.noise_sigma = 1.0;
   sequence.realism.exposure_amplitude = c.exposure;
   sim::SequenceRenderer renderer(sequence);
-  SlamSystem slam(geometry::makeCameraModel(renderer.calibration()), SlamParams{});
+  const SlamParams params;
+  SlamSystem slam(geometry::makeCameraModel(renderer.calibration()), params);
   std::vector<Eigen::Vector3d> estimate, truth;
   int first_tracked = -1, lost = 0;
   for (int k = 0; k < renderer.frameCount(); ++k) {
