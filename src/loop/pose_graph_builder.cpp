@@ -1,9 +1,13 @@
 #include "scale_drift_slam/loop/pose_graph_builder.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 namespace scale_drift_slam::loop {
 namespace {
@@ -21,24 +25,35 @@ PoseGraphEdge relativeEdge(const map::Map& map, map::KeyframeId newer, map::Keyf
   return edge;
 }
 
-/// Number of points shared by each pair (older, newer) of selected keyframes.
-std::map<std::pair<map::KeyframeId, map::KeyframeId>, int> sharedPoints(
+/// Number of points shared by each pair (older, newer) of selected keyframes, in pair order.
+/// One pass over the points with a hash of 64-bit pair keys (maps of 10^5 points, 10^3 keyframes
+/// take milliseconds).
+std::vector<std::pair<std::pair<map::KeyframeId, map::KeyframeId>, int>> sharedPoints(
     const map::Map& map, const std::set<map::KeyframeId>& selected) {
-  std::map<std::pair<map::KeyframeId, map::KeyframeId>, int> shared;
+  const bool all = selected.size() == map.numKeyframes();
+  std::unordered_map<std::uint64_t, int> shared;
+  std::vector<map::KeyframeId> observers;
   for (const auto& entry : map.points()) {
-    std::set<map::KeyframeId> observers;
+    observers.clear();
     for (const map::KeyframeId id : entry.second.observed_by) {
-      if (selected.count(id)) {
-        observers.insert(id);
-      }
+      if (all || selected.count(id)) observers.push_back(id);
     }
-    for (auto a = observers.begin(); a != observers.end(); ++a) {
-      for (auto b = std::next(a); b != observers.end(); ++b) {
-        ++shared[{*a, *b}];
-      }
+    std::sort(observers.begin(), observers.end());
+    observers.erase(std::unique(observers.begin(), observers.end()), observers.end());
+    for (std::size_t a = 0; a < observers.size(); ++a) {
+      for (std::size_t b = a + 1; b < observers.size(); ++b)
+        ++shared[(std::uint64_t{observers[a]} << 32) | observers[b]];
     }
   }
-  return shared;
+  std::vector<std::pair<std::pair<map::KeyframeId, map::KeyframeId>, int>> pairs;
+  pairs.reserve(shared.size());
+  for (const auto& [key, count] : shared) {
+    pairs.push_back(
+        {{static_cast<map::KeyframeId>(key >> 32), static_cast<map::KeyframeId>(key & 0xffffffffu)},
+         count});
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "scale_drift_slam/mapping/mapper.h"
 
 #include <chrono>
+#include <cstdio>
 #include <map>
 #include <stdexcept>
 
@@ -16,6 +17,21 @@ double msSince(std::chrono::steady_clock::time_point start) {
 }
 
 }  // namespace
+
+std::string LoopCorrectionStatistics::describe() const {
+  char text[400];
+  const std::string loop =
+      "loop " + std::to_string(constraint.current_id) + " -> " + std::to_string(constraint.loop_id);
+  if (!applied) return loop + " not applied: " + reason;
+  std::snprintf(text, sizeof(text),
+                " corrected: %s graph of %zu keyframes (%zu co-visibility, %zu loop edges), %d "
+                "iterations; times: build %.1f ms, solve %.1f ms, map %.1f ms, structure-only "
+                "BA %.1f ms, total %.1f ms; scale at the current keyframe %.4f",
+                loop::toString(mode).c_str(), vertices, covisibility_edges, loop_edges,
+                graph_iterations, build_ms, graph_ms, correction_ms, structure_ms, total_ms,
+                current_correction_scale);
+  return loop + text;
+}
 
 void LoopCorrectionParams::validate() const {
   graph.validate();
@@ -82,6 +98,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   const auto start = std::chrono::steady_clock::now();
   LoopCorrectionStatistics stats;
   stats.constraint = constraint;
+  stats.mode = params_.loop_correction.graph.mode;
   map::MapUpdate update;
   if (!map_.hasKeyframe(constraint.current_id) || !map_.hasKeyframe(constraint.loop_id)) {
     stats.reason = "the map holds no keyframe " +
@@ -104,10 +121,10 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   builder.min_shared_points = p.covisibility_min_shared_points;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
   const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges_, {oldest}, builder);
+  stats.build_ms = msSince(start);
   stats.vertices = graph.vertices().size();
   stats.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
   stats.covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
-  stats.reprojection_before = reprojectionStats(map_, {focal_length_px_, focal_length_px_});
   const loop::PoseGraphResult solved = graph.optimize(p.graph);
   stats.graph_iterations = solved.iterations;
   stats.graph_initial_chi2 = solved.initial_chi2;
@@ -123,10 +140,13 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
     update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
   stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();
+  const auto correction_start = std::chrono::steady_clock::now();
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
+  stats.correction_ms = msSince(correction_start);
   const StructureOnlyBAResult structure =
       refineStructure(map_, {}, {focal_length_px_, focal_length_px_}, p.structure);
   stats.structure_ms = 1e3 * structure.time_s;
+  stats.reprojection_before = structure.before;  // after the correction, before the refinement
   stats.reprojection_after = structure.after;
 
   for (const auto& [id, keyframe] : map_.keyframes())

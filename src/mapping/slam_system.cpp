@@ -127,15 +127,7 @@ void SlamSystem::handle(MapperInput input) {
   const loop::LoopConstraint& constraint = std::get<loop::LoopConstraint>(input);
   LoopCorrectionStatistics c;
   map::MapUpdate update = mapper_.closeLoop(constraint, &c);
-  log(c.applied
-          ? "loop " + std::to_string(constraint.current_id) + " -> " +
-                std::to_string(constraint.loop_id) + " corrected (" +
-                loop::toString(params_.mapper.loop_correction.graph.mode) + " graph of " +
-                std::to_string(c.vertices) + " keyframes, " + std::to_string(c.graph_iterations) +
-                " iterations, " + std::to_string(c.graph_ms) + " ms; structure-only BA " +
-                std::to_string(c.structure_ms) + " ms; total " + std::to_string(c.total_ms) + " ms)"
-          : "loop " + std::to_string(constraint.current_id) + " -> " +
-                std::to_string(constraint.loop_id) + " not applied: " + c.reason);
+  log(c.describe());
   {
     std::lock_guard<std::mutex> lock(record_mutex_);
     loops_.push_back(c);

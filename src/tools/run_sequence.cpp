@@ -141,8 +141,10 @@ nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
                      {"structure_only_ba_ms", loop.structure_ms},
                      {"correction_ms", loop.total_ms},
                      {"correction_scale_at_current", loop.current_correction_scale},
-                     {"reprojection_median_px_before", loop.reprojection_before.median},
-                     {"reprojection_median_px_after", loop.reprojection_after.median}});
+                     {"graph_build_ms", loop.build_ms},
+                     {"map_correction_ms", loop.correction_ms},
+                     {"reprojection_median_px_corrected", loop.reprojection_before.median},
+                     {"reprojection_median_px_refined", loop.reprojection_after.median}});
   }
   return loops;
 }

@@ -27,7 +27,7 @@ struct LoopCorrectionParams {
   /// The graph's mode (sim3: the paper; se3: the baseline that cannot correct scale) and solver.
   loop::PoseGraphOptions graph;
   /// Co-visibility edges join keyframes sharing at least this many points (0: none).
-  int covisibility_min_shared_points = 30;
+  int covisibility_min_shared_points = 100;
   /// Weight of a loop edge's information relative to an odometry edge's (identity).
   double loop_edge_weight = 1.0;
   StructureOnlyBAOptions structure;
@@ -52,8 +52,13 @@ struct LoopCorrectionStatistics {
   double graph_initial_chi2 = 0.0, graph_final_chi2 = 0.0;
   /// Scale of the correction at the current keyframe (1 for SE(3)).
   double current_correction_scale = 1.0;
-  double graph_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
+  double build_ms = 0.0, graph_ms = 0.0, correction_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  /// Reprojection errors after the correction, before and after the structure-only BA.
   ReprojectionStats reprojection_before, reprojection_after;
+  loop::PoseGraphMode mode = loop::PoseGraphMode::kSim3;
+  /// One line for logs: the loop, the graph and the time of each step, or why it was refused.
+  std::string describe() const;
 };
 
 class Mapper {
