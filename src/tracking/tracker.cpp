@@ -126,6 +126,10 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
     result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
   }
   result.state = state_;
+  if (result.has_pose) {
+    for (const Measurement& m : previous_measurements_)
+      result.tracked_px.push_back(m.px);
+  }
   result.times.total = total.lapMs();
   result.times.cpu = threadCpuMs() - cpu_start;
   return result;
