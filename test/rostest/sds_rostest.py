@@ -1,0 +1,141 @@
+"""Shared helpers of the scale_drift_slam rostests: rendering test bags (cached), playing them,
+collecting rosout, recording the camera trajectory from tf and scoring it with the package's own
+evaluate_trajectory tool."""
+
+import os
+import signal
+import subprocess
+import tempfile
+import threading
+import time
+import json
+import xmlrpc.client
+
+import rosgraph
+import roslib.packages
+import rospkg
+import rospy
+from rosgraph_msgs.msg import Log
+
+PKG = 'scale_drift_slam'
+
+
+def tool(name):
+    """Path of one of the package's executables (render_sequence, evaluate_trajectory, ...)."""
+    found = roslib.packages.find_node(PKG, name)
+    if not found:
+        raise RuntimeError('%s not found: build the package first' % name)
+    return found[0]
+
+
+def work_dir():
+    path = os.path.join(rospkg.get_ros_home(), 'scale_drift_slam_rostest')
+    os.makedirs(path, exist_ok=True)
+    return path
+
+
+def render_bag(scene, frames, extra=()):
+    """Renders `scene` (first `frames` frames, 1 grey level of noise) as a bag and a TUM folder
+    in the work folder, unless an up-to-date copy is there. Returns (bag, folder). Safe when two
+    tests render at once: each renders into its own temporary names and renames."""
+    name = '%s_%d%s' % (scene, frames, ''.join(x.replace('-', '_') for x in extra))
+    bag = os.path.join(work_dir(), name + '.bag')
+    folder = os.path.join(work_dir(), name)
+    renderer = tool('render_sequence')
+    fresh = (os.path.exists(bag) and os.path.isdir(folder) and
+             os.path.getmtime(bag) > os.path.getmtime(renderer))
+    if not fresh:
+        tmp = tempfile.mkdtemp(dir=work_dir(), prefix='.render_')
+        subprocess.check_call([renderer, '--scene', scene, '--frames', str(frames), '--noise', '1',
+                               '--out', os.path.join(tmp, 'seq'), '--bag', os.path.join(tmp, 'seq.bag'),
+                               '--quiet'] + list(extra))
+        subprocess.call(['rm', '-rf', folder])
+        os.rename(os.path.join(tmp, 'seq'), folder)
+        os.rename(os.path.join(tmp, 'seq.bag'), bag)
+        os.rmdir(tmp)
+    return bag, folder
+
+
+def play_bag(bag, rate=1.0, delay=1.0, wait=True):
+    """rosbag play with the clock; returns the process (finished when wait)."""
+    process = subprocess.Popen(['rosbag', 'play', '--clock', '--quiet', '-d', str(delay),
+                                '-r', str(rate), bag], stdin=subprocess.DEVNULL,
+                               stdout=subprocess.DEVNULL)
+    if wait:
+        process.wait()
+    return process
+
+
+class Rosout(object):
+    """Collects every rosout message: (node name, level, text)."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.messages = []
+        self.sub = rospy.Subscriber('/rosout', Log, self._callback, queue_size=1000)
+
+    def _callback(self, msg):
+        with self.lock:
+            self.messages.append((msg.name, msg.level, msg.msg))
+
+    def find(self, node, *words, level=None):
+        """Messages of `node` that contain every word (case-insensitive), at `level` or above."""
+        with self.lock:
+            return [m for m in self.messages if m[0].endswith(node) and
+                    (level is None or m[1] >= level) and
+                    all(w.lower() in m[2].lower() for w in words)]
+
+    def wait_for(self, node, *words, level=None, timeout=20.0):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            found = self.find(node, *words, level=level)
+            if found:
+                return found
+            time.sleep(0.1)
+        return []
+
+    def dump(self, node):
+        with self.lock:
+            return '\n'.join('%s [%d] %s' % m for m in self.messages if m[0].endswith(node))
+
+
+def node_pid(name):
+    """The process id of a running node (None when it is not registered or does not answer)."""
+    master = rosgraph.Master('/sds_rostest')
+    try:
+        uri = master.lookupNode(name)
+        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/sds_rostest')
+        return pid if code == 1 else None
+    except Exception:  # not registered, or the registration of a dead process
+        return None
+
+
+def kill_node(name):
+    pid = node_pid(name)
+    if pid is None:
+        raise RuntimeError('node %s is not running' % name)
+    os.kill(pid, signal.SIGKILL)
+    return pid
+
+
+def wait_until(condition, timeout, step=0.1):
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        if condition():
+            return True
+        time.sleep(step)
+    return condition()
+
+
+def write_tum(path, poses):
+    """poses: [(stamp, (tx, ty, tz), (qx, qy, qz, qw))]"""
+    with open(path, 'w') as f:
+        f.write('# timestamp tx ty tz qx qy qz qw\n')
+        for stamp, t, q in poses:
+            f.write('%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n' % ((stamp,) + tuple(t) + tuple(q)))
+
+
+def evaluate(groundtruth, estimate):
+    """evaluate_trajectory --json (ATE after Sim(3) alignment): the parsed report."""
+    out = subprocess.check_output([tool('evaluate_trajectory'), groundtruth, estimate, '--json'])
+    return json.loads(out.decode())
