@@ -78,8 +78,10 @@ class TrackingNode {
  private:
   void subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     const std::string topic = nh.resolveName("image");
+    image_topic_ = topic;
     if (params_.transport == "compressed") {  // decoded here: Debian ships no compressed plugin
-      compressed_sub_ = nh.subscribe(topic + "/compressed", params_.image_queue_size,
+      image_topic_ = topic + "/compressed";
+      compressed_sub_ = nh.subscribe(image_topic_, params_.image_queue_size,
                                      &TrackingNode::onCompressedImage, this);
     } else {
       image_sub_ = it_.subscribe(topic, params_.image_queue_size, &TrackingNode::onImage, this,
@@ -155,7 +157,7 @@ class TrackingNode {
     try {
       image = ros_conversions::cameraImageFromMsg(msg);
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "dropping images: %s", e.what());
+      ROS_ERROR_THROTTLE(5, "dropping images on %s: %s", image_topic_.c_str(), e.what());
       return;
     }
     last_stamp_ = header.stamp;
@@ -294,6 +296,7 @@ class TrackingNode {
   ros::Subscriber compressed_sub_, info_sub_, update_sub_;
   ros::Publisher keyframe_pub_, status_pub_, odometry_pub_, path_pub_;
   ros::ServiceServer reset_srv_;
+  std::string image_topic_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   ros::CallbackQueue update_queue_;

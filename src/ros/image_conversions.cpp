@@ -56,12 +56,7 @@ cv::Mat copyPixels(const sensor_msgs::Image& msg, int type) {
 
 CameraImage cameraImageFromMsg(const sensor_msgs::Image& msg) {
   CameraImage result;
-  try {
-    result.encoding = tracking::parsePixelEncoding(msg.encoding);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("image encoding '" + msg.encoding +
-                                "' is not supported: " + e.what());
-  }
+  result.encoding = tracking::parsePixelEncoding(msg.encoding);  // names the accepted ones
   result.image = copyPixels(msg, matTypeOf(result.encoding));
   return result;
 }

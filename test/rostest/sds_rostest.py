@@ -139,3 +139,54 @@ def evaluate(groundtruth, estimate):
     """evaluate_trajectory --json (ATE after Sim(3) alignment): the parsed report."""
     out = subprocess.check_output([tool('evaluate_trajectory'), groundtruth, estimate, '--json'])
     return json.loads(out.decode())
+
+
+def read_images(bag, topic='/camera/image_raw', count=None):
+    """The first `count` sensor_msgs/Image of a bag, and its first CameraInfo."""
+    import rosbag
+    images, info = [], None
+    with rosbag.Bag(bag) as b:
+        for t, msg, _ in b.read_messages(topics=[topic, '/camera/camera_info']):
+            if t == topic:
+                images.append(msg)
+                if count is not None and len(images) >= count:
+                    break
+            elif info is None:
+                info = msg
+    return images, info
+
+
+def png(grey, width, height):
+    """A grey 8-bit image (bytes, row-major) as PNG bytes (no OpenCV in Debian's python3)."""
+    import struct
+    import zlib
+
+    def chunk(tag, data):
+        return (struct.pack('>I', len(data)) + tag + data +
+                struct.pack('>I', zlib.crc32(tag + data) & 0xffffffff))
+    raw = b''.join(b'\x00' + grey[y * width:(y + 1) * width] for y in range(height))
+    return (b'\x89PNG\r\n\x1a\n' +
+            chunk(b'IHDR', struct.pack('>IIBBBBB', width, height, 8, 0, 0, 0, 0)) +
+            chunk(b'IDAT', zlib.compress(raw, 1)) + chunk(b'IEND', b''))
+
+
+def reencode(msg, encoding):
+    """A copy of a mono8 image message in another encoding (mono8, bgr8, rgb8, bgra8, mono16)."""
+    import copy
+    import numpy as np
+    grey = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width)
+    if encoding in ('bgr8', 'rgb8'):
+        pixels = np.repeat(grey[:, :, None], 3, axis=2)
+    elif encoding == 'bgra8':
+        pixels = np.concatenate([np.repeat(grey[:, :, None], 3, axis=2),
+                                 np.full(grey.shape + (1,), 255, np.uint8)], axis=2)
+    elif encoding == 'mono16':
+        pixels = (grey.astype('<u2') * 256).astype('<u2')
+    else:
+        pixels = grey
+    out = copy.deepcopy(msg)
+    out.encoding = encoding
+    out.is_bigendian = 0
+    out.step = msg.width * pixels.itemsize * (pixels.shape[2] if pixels.ndim == 3 else 1)
+    out.data = pixels.tobytes()
+    return out
