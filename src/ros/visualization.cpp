@@ -118,18 +118,18 @@ cv::Mat debugImage(const cv::Mat& grey, const tracking::FrameResult& result) {
   cv::Mat image;
   cv::cvtColor(grey, image, cv::COLOR_GRAY2BGR);
   for (const Eigen::Vector2d& px : result.tracked_px) {
-    cv::circle(image, cv::Point2d(px.x(), px.y()), 3, cv::Scalar(0, 220, 0), 1, cv::LINE_AA);
+    cv::circle(image, cv::Point2d(px.x(), px.y()), 4, cv::Scalar(0, 230, 0), 2, cv::LINE_AA);
   }
   char text[160];
   std::snprintf(text, sizeof(text), "%s  inliers %d  matches %d  %.1f ms",
                 tracking::trackingStateName(result.state).c_str(), result.num_inliers,
                 result.num_found, result.times.total);
-  const double scale = std::max(0.4, image.cols / 1200.0);
+  const double scale = std::max(0.4, image.cols / 800.0);  // readable at half size in rviz
   const auto put = [&](const std::string& line, int row) {
-    const cv::Point origin(8, static_cast<int>((row + 1) * 24 * scale / 0.5));
-    cv::putText(image, line, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 3,
+    const cv::Point origin(8, static_cast<int>((row + 1) * 34 * scale));
+    cv::putText(image, line, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 4,
                 cv::LINE_AA);
-    cv::putText(image, line, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 255, 255), 1,
+    cv::putText(image, line, origin, cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 255, 255), 2,
                 cv::LINE_AA);
   };
   put(text, 0);

@@ -76,7 +76,7 @@ TEST(Visualization, DebugImageShowsTrackedPoints) {
   const cv::Mat image = debugImage(grey, result);
   ASSERT_EQ(image.type(), CV_8UC3);
   ASSERT_EQ(image.size(), grey.size());
-  const cv::Vec3b on_circle = image.at<cv::Vec3b>(90, 83);            // radius 3
+  const cv::Vec3b on_circle = image.at<cv::Vec3b>(90, 84);            // radius 4
   EXPECT_GT(on_circle[1], on_circle[0] + 50);                         // green
   EXPECT_EQ(image.at<cv::Vec3b>(110, 10), cv::Vec3b(100, 100, 100));  // untouched background
 }

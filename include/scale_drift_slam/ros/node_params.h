@@ -47,7 +47,7 @@ struct MappingNodeParams {
   bool map_z_up = true;           ///< Must match the tracking node's.
   std::string trajectory_file;    ///< Default path of ~save_trajectory.
   int keyframe_queue_size = 100;  ///< Keyframes waiting for the window BA.
-  double marker_scale = 0.1;      ///< Keyframe frustum size in map units (median depth 1 at start).
+  double marker_scale = 0.05;     ///< Keyframe frustum size in map units (median depth 1 at start).
   void validate() const;
 };
 
