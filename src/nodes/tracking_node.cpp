@@ -38,16 +38,6 @@ struct ReceivedUpdate {
   map::MapUpdate update;
 };
 
-geometry_msgs::TransformStamped stamped(const geometry::SE3& T, const ros::Time& stamp,
-                                        const std::string& parent, const std::string& child) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform = ros_conversions::toTransformMsg(T);
-  return t;
-}
-
 class TrackingNode {
  public:
   TrackingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, ros_params::TrackingNodeConfig config)
@@ -68,8 +58,9 @@ class TrackingNode {
     debug_pub_ = it_.advertise("debug_image", 1);
     reset_srv_ = pnh.advertiseService("reset", &TrackingNode::onReset, this);
     if (params_.publish_optical_transform) {
-      static_broadcaster_.sendTransform(stamped(ros_frames::bodyFromOptical(), ros::Time(0),
-                                                params_.frames.camera, params_.frames.optical));
+      static_broadcaster_.sendTransform(
+          ros_conversions::toTransformStampedMsg(ros_frames::bodyFromOptical(), ros::Time(0),
+                                                 params_.frames.camera, params_.frames.optical));
     }
     path_.header.frame_id = params_.frames.map;
     update_spinner_.start();
@@ -226,23 +217,17 @@ class TrackingNode {
       std_msgs::Header debug_header = header;
       debug_header.frame_id = params_.frames.optical;
       const cv::Mat grey = tracking::toGrey(image.image, image.encoding);
-      sensor_msgs::Image debug;
-      debug.header = debug_header;
-      debug.encoding = "bgr8";
-      const cv::Mat drawn = ros_visualization::debugImage(grey, result);
-      debug.width = static_cast<std::uint32_t>(drawn.cols);
-      debug.height = static_cast<std::uint32_t>(drawn.rows);
-      debug.step = static_cast<std::uint32_t>(drawn.cols * 3);
-      debug.data.assign(drawn.data, drawn.data + drawn.total() * 3);
-      debug_pub_.publish(debug);
+      debug_pub_.publish(
+          ros_conversions::toBgr8Msg(ros_visualization::debugImage(grey, result), debug_header));
     }
   }
 
   void publishPose(const ros::Time& stamp, const geometry::SE3& T_cam_world) {
     const ros_frames::CameraTransforms t = odom_.transforms(T_cam_world);
     const ros_params::FrameNames& f = params_.frames;
-    broadcaster_.sendTransform({stamped(t.T_map_odom, stamp, f.map, f.odom),
-                                stamped(t.T_odom_body, stamp, f.odom, f.camera)});
+    broadcaster_.sendTransform(
+        {ros_conversions::toTransformStampedMsg(t.T_map_odom, stamp, f.map, f.odom),
+         ros_conversions::toTransformStampedMsg(t.T_odom_body, stamp, f.odom, f.camera)});
     nav_msgs::Odometry odometry;  // pose only: no covariance or twist is estimated
     odometry.header.stamp = stamp;
     odometry.header.frame_id = f.odom;

@@ -72,20 +72,34 @@ CameraImage cameraImageFromMsg(const sensor_msgs::CompressedImage& msg) {
   return result;
 }
 
-sensor_msgs::Image toMono8Msg(const cv::Mat& grey, const std_msgs::Header& header) {
-  if (grey.type() != CV_8UC1) throw std::invalid_argument("a mono8 image must be CV_8UC1");
+namespace {
+
+sensor_msgs::Image packedMsg(const cv::Mat& image, const std::string& encoding,
+                             const std_msgs::Header& header) {
   sensor_msgs::Image msg;
   msg.header = header;
-  msg.encoding = "mono8";
-  msg.width = static_cast<std::uint32_t>(grey.cols);
-  msg.height = static_cast<std::uint32_t>(grey.rows);
-  msg.step = msg.width;
+  msg.encoding = encoding;
+  msg.width = static_cast<std::uint32_t>(image.cols);
+  msg.height = static_cast<std::uint32_t>(image.rows);
+  msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize());
   msg.is_bigendian = 0;
   msg.data.resize(static_cast<std::size_t>(msg.step) * msg.height);
-  for (int y = 0; y < grey.rows; ++y) {
-    std::memcpy(&msg.data[static_cast<std::size_t>(y) * msg.step], grey.ptr(y), msg.width);
+  for (int y = 0; y < image.rows; ++y) {
+    std::memcpy(&msg.data[static_cast<std::size_t>(y) * msg.step], image.ptr(y), msg.step);
   }
   return msg;
+}
+
+}  // namespace
+
+sensor_msgs::Image toMono8Msg(const cv::Mat& grey, const std_msgs::Header& header) {
+  if (grey.type() != CV_8UC1) throw std::invalid_argument("a mono8 image must be CV_8UC1");
+  return packedMsg(grey, "mono8", header);
+}
+
+sensor_msgs::Image toBgr8Msg(const cv::Mat& bgr, const std_msgs::Header& header) {
+  if (bgr.type() != CV_8UC3) throw std::invalid_argument("a bgr8 image must be CV_8UC3");
+  return packedMsg(bgr, "bgr8", header);
 }
 
 cv::Mat fromMono8Msg(const sensor_msgs::Image& msg) {

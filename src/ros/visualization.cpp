@@ -85,7 +85,7 @@ visualization_msgs::MarkerArray keyframeMarkers(
   const std::vector<Eigen::Vector3d> corners = {{-w, -h, d}, {w, -h, d}, {w, h, d}, {-w, h, d}};
   for (const auto& [id, keyframe] : map.keyframes()) {
     const geometry::SE3 T_map_kf = T_map_world * keyframe.T_kf_world.inverse();
-    const Eigen::Vector3d apex = T_map_kf.translation();
+    const Eigen::Vector3d& apex = T_map_kf.translation();
     for (std::size_t i = 0; i < corners.size(); ++i) {
       const Eigen::Vector3d a = T_map_kf * corners[i];
       const Eigen::Vector3d b = T_map_kf * corners[(i + 1) % corners.size()];

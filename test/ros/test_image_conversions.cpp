@@ -105,6 +105,13 @@ TEST(ImageConversions, Mono8RoundTrip) {
   EXPECT_EQ(msg.header.frame_id, "cam");
   EXPECT_EQ(cv::norm(fromMono8Msg(msg), grey, cv::NORM_INF), 0.0);
   EXPECT_THROW(toMono8Msg(cv::Mat(3, 3, CV_8UC3), header), std::invalid_argument);
+  cv::Mat bgr(4, 5, CV_8UC3);
+  cv::randu(bgr, 0, 255);
+  const sensor_msgs::Image colour = toBgr8Msg(bgr, header);
+  EXPECT_EQ(colour.encoding, "bgr8");
+  const CameraImage back = cameraImageFromMsg(colour);
+  EXPECT_EQ(cv::norm(back.image, bgr, cv::NORM_INF), 0.0);
+  EXPECT_THROW(toBgr8Msg(grey, header), std::invalid_argument);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ import rostest
 from rosgraph_msgs.msg import Log
 from scale_drift_slam.msg import Keyframe, MapUpdate, TrackingStatus
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+from std_srvs.srv import Trigger
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sds_rostest as sds  # noqa: E402
@@ -115,6 +116,13 @@ class BadInput(unittest.TestCase):
             lambda: self.updates[-1].session == restarted[-1].session, 10))
         new_keyframes = [k for k in self.keyframes if k.session == restarted[-1].session]
         self.assertEqual(new_keyframes[0].id, 0)
+        self.assertAlive('/tracking_node', '/mapping_node')
+
+        # Both nodes reset on request and say so.
+        for node in ('/tracking_node', '/mapping_node'):
+            answer = rospy.ServiceProxy(node + '/reset', Trigger)()
+            self.assertTrue(answer.success, answer.message)
+            self.assertTrue(rosout.wait_for(node, '~reset was called', level=Log.WARN))
         self.assertAlive('/tracking_node', '/mapping_node')
         print('warnings and errors the nodes logged:')
         for name, level, text in rosout.find('', level=Log.WARN):

@@ -29,6 +29,9 @@ CameraImage cameraImageFromMsg(const sensor_msgs::CompressedImage& msg);
 /// An 8-bit grey image (CV_8UC1) as a mono8 message with the given header. Throws
 /// std::invalid_argument for another type.
 sensor_msgs::Image toMono8Msg(const cv::Mat& grey, const std_msgs::Header& header);
+/// A colour image (CV_8UC3, OpenCV's BGR order) as a bgr8 message. Throws std::invalid_argument
+/// for another type.
+sensor_msgs::Image toBgr8Msg(const cv::Mat& bgr, const std_msgs::Header& header);
 /// A mono8 message as an 8-bit grey image (copied). Throws std::invalid_argument for another
 /// encoding or too little data.
 cv::Mat fromMono8Msg(const sensor_msgs::Image& msg);
