@@ -5,7 +5,6 @@ evaluate_trajectory tool."""
 import os
 import signal
 import subprocess
-import tempfile
 import threading
 import time
 import json
@@ -36,23 +35,23 @@ def work_dir():
 
 def render_bag(scene, frames, extra=()):
     """Renders `scene` (first `frames` frames, 1 grey level of noise) as a bag and a TUM folder
-    in the work folder, unless an up-to-date copy is there. Returns (bag, folder). Safe when two
-    tests render at once: each renders into its own temporary names and renames."""
+    in the work folder, unless a copy newer than render_sequence is there. Returns (bag, folder).
+    Tests running at once take turns through a lock file."""
+    import fcntl
     name = '%s_%d%s' % (scene, frames, ''.join(x.replace('-', '_') for x in extra))
     bag = os.path.join(work_dir(), name + '.bag')
     folder = os.path.join(work_dir(), name)
     renderer = tool('render_sequence')
-    fresh = (os.path.exists(bag) and os.path.isdir(folder) and
-             os.path.getmtime(bag) > os.path.getmtime(renderer))
-    if not fresh:
-        tmp = tempfile.mkdtemp(dir=work_dir(), prefix='.render_')
-        subprocess.check_call([renderer, '--scene', scene, '--frames', str(frames), '--noise', '1',
-                               '--out', os.path.join(tmp, 'seq'), '--bag', os.path.join(tmp, 'seq.bag'),
-                               '--quiet'] + list(extra))
-        subprocess.call(['rm', '-rf', folder])
-        os.rename(os.path.join(tmp, 'seq'), folder)
-        os.rename(os.path.join(tmp, 'seq.bag'), bag)
-        os.rmdir(tmp)
+    with open(os.path.join(work_dir(), name + '.lock'), 'w') as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        fresh = (os.path.exists(bag) and os.path.isdir(folder) and
+                 os.path.getmtime(bag) > os.path.getmtime(renderer))
+        if not fresh:
+            subprocess.call(['rm', '-rf', folder, bag])
+            subprocess.check_call([renderer, '--scene', scene, '--frames', str(frames),
+                                   '--noise', '1', '--out', folder, '--bag', bag + '.tmp',
+                                   '--quiet'] + list(extra))
+            os.rename(bag + '.tmp', bag)
     return bag, folder
 
 
@@ -99,12 +98,20 @@ class Rosout(object):
             return '\n'.join('%s [%d] %s' % m for m in self.messages if m[0].endswith(node))
 
 
+class _TimeoutTransport(xmlrpc.client.Transport):
+    def make_connection(self, host):
+        connection = super().make_connection(host)
+        connection.timeout = 3.0
+        return connection
+
+
 def node_pid(name):
     """The process id of a running node (None when it is not registered or does not answer)."""
     master = rosgraph.Master('/sds_rostest')
     try:
         uri = master.lookupNode(name)
-        code, _, pid = xmlrpc.client.ServerProxy(uri).getPid('/sds_rostest')
+        proxy = xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport())
+        code, _, pid = proxy.getPid('/sds_rostest')
         return pid if code == 1 else None
     except Exception:  # not registered, or the registration of a dead process
         return None

@@ -52,10 +52,11 @@ class MappingRestart(unittest.TestCase):
             lambda: len(updates) >= 3 and statuses and statuses[-1].header.stamp.to_sec() > 1003.0,
             60))
         first_mapper = updates[-1].mapper_id
-        sds.kill_node('/mapping_node')
+        killed_pid = sds.kill_node('/mapping_node')
         killed = time.time()
-        self.assertTrue(sds.wait_until(lambda: sds.node_pid('/mapping_node') is not None, 30),
-                        'mapping_node was not restarted')
+        self.assertTrue(sds.wait_until(
+            lambda: sds.node_pid('/mapping_node') not in (None, killed_pid), 30),
+            'mapping_node was not restarted')
         restarted = time.time()
         tf_while_down = sum(1 for t in tf_wall if killed < t < restarted)
         self.assertGreater(tf_while_down, 5, 'no tf while the mapping node was down')

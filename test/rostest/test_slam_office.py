@@ -72,7 +72,8 @@ class SlamOnBag(unittest.TestCase):
         self.assertEqual([k.id for k in keyframes], list(range(len(keyframes))))
         self.assertTrue(all(k.image.encoding == 'mono8' and k.camera.K[0] > 0 for k in keyframes))
         self.assertGreater(clouds[-1], 1000)
-        self.assertGreater(sum(1 for a, b in zip(clouds, clouds[1:]) if b > a), len(clouds) // 2)
+        self.assertGreater(clouds[-1], 2 * clouds[0])
+        self.assertGreaterEqual(sum(1 for a, b in zip(clouds, clouds[1:]) if b > a), 3)
         self.assertEqual(len(set(k.session for k in keyframes)), 1)
         self.assertFalse([u for u in updates if u.has_loop_correction])
 
