@@ -55,10 +55,12 @@ def render_bag(scene, frames, extra=()):
     return bag, folder
 
 
-def play_bag(bag, rate=1.0, delay=1.0, wait=True):
-    """rosbag play with the clock; returns the process (finished when wait)."""
+def play_bag(bag, rate=1.0, delay=1.0, wait=True, duration=None):
+    """rosbag play with the clock (the first `duration` seconds of the bag when given); returns
+    the process (finished when wait)."""
+    limit = ['-u', str(duration)] if duration else []
     process = subprocess.Popen(['rosbag', 'play', '--clock', '--quiet', '-d', str(delay),
-                                '-r', str(rate), bag], stdin=subprocess.DEVNULL,
+                                '-r', str(rate)] + limit + [bag], stdin=subprocess.DEVNULL,
                                stdout=subprocess.DEVNULL)
     if wait:
         process.wait()
@@ -123,6 +125,20 @@ def kill_node(name):
         raise RuntimeError('node %s is not running' % name)
     os.kill(pid, signal.SIGKILL)
     return pid
+
+
+def last_stamp(folder):
+    """The stamp of a rendered sequence's last frame (its ground truth's last line)."""
+    lines = [l for l in open(os.path.join(folder, 'groundtruth.txt')) if l.strip() and l[0] != '#']
+    return float(lines[-1].split()[0])
+
+
+def wait_for_last_frame(statuses, folder, timeout=30):
+    """Waits until a TrackingStatus of the sequence's last frame arrived. At most the first image
+    of a bag may be missing: it can arrive before the first CameraInfo."""
+    end = last_stamp(folder)
+    return wait_until(lambda: statuses and abs(statuses[-1].header.stamp.to_sec() - end) < 1e-3,
+                      timeout)
 
 
 def wait_until(condition, timeout, step=0.1):

@@ -3,6 +3,8 @@
 tf map -> camera at the frame rate, keyframes published, the map cloud non-empty and growing,
 the trajectory recorded from tf within 1% of the path (ATE after Sim(3) alignment, the front-end
 issue's bound), no loop correction (map -> odom identity), ~save_trajectory writes the keyframes.
+Then the bag is played again from its start (the clock jumps back): the tracker resets, the
+mapper starts a new map, tracking resumes.
 """
 
 import os
@@ -13,6 +15,7 @@ import unittest
 import rospy
 import rostest
 import tf2_ros
+from rosgraph_msgs.msg import Log
 from scale_drift_slam.msg import Keyframe, MapUpdate, TrackingStatus
 from scale_drift_slam.srv import SaveTrajectory
 from sensor_msgs.msg import PointCloud2
@@ -27,6 +30,7 @@ FRAMES = 300
 class SlamOnBag(unittest.TestCase):
 
     def test_tracking_and_mapping_on_office_orbit(self):
+        rosout = sds.Rosout()
         bag, folder = sds.render_bag('office_orbit', FRAMES)
         buffer = tf2_ros.Buffer(cache_time=rospy.Duration(3600))
         tf2_ros.TransformListener(buffer)
@@ -51,8 +55,9 @@ class SlamOnBag(unittest.TestCase):
         sds.play_bag(bag)
         played = time.time() - start
         # Tracking has seen the last image and mapping has answered the last keyframe.
-        self.assertTrue(sds.wait_until(lambda: len(statuses) >= FRAMES, 20),
+        self.assertTrue(sds.wait_for_last_frame(statuses, folder),
                         '%d statuses for %d images' % (len(statuses), FRAMES))
+        self.assertGreaterEqual(len(statuses), FRAMES - 1)  # the first may precede CameraInfo
         sds.wait_until(lambda: keyframes and updates and
                        updates[-1].header.stamp == keyframes[-1].header.stamp, 20)
 
@@ -60,7 +65,7 @@ class SlamOnBag(unittest.TestCase):
         tracked = [s for s in statuses if s.has_pose]
         first = next(i for i, s in enumerate(statuses) if s.has_pose)
         self.assertLess(first, 30, 'initialised only at frame %d' % first)
-        self.assertEqual(len(tracked), FRAMES - first, 'frames after initialisation not tracked')
+        self.assertEqual(len(tracked), len(statuses) - first, 'frames after initialisation lost')
         self.assertFalse([s for s in statuses if s.state == TrackingStatus.LOST])
         self.assertEqual(len(set(tf_stamps)), len(tracked))
         sim_rate = (len(tf_stamps) - 1) / (tf_stamps[-1] - tf_stamps[0])
@@ -106,6 +111,19 @@ class SlamOnBag(unittest.TestCase):
                   100 * keyframe_ratio))
         self.assertLess(ratio, 0.01)
         self.assertLess(keyframe_ratio, 0.01)
+        for node in ('/tracking_node', '/mapping_node'):
+            self.assertIsNotNone(sds.node_pid(node), node + ' died')
+
+        # The bag restarted: the first 2.5 s again, the clock jumps back by ~8 s.
+        session = statuses[-1].session
+        sds.play_bag(bag, duration=2.5)
+        self.assertTrue(rosout.wait_for('tracking_node', 'time jumped backwards', level=Log.WARN),
+                        rosout.dump('tracking_node'))
+        self.assertTrue(rosout.wait_for('mapping_node', 'new tracker session', level=Log.WARN),
+                        rosout.dump('mapping_node'))
+        self.assertTrue(sds.wait_until(lambda: statuses[-1].session != session and
+                                       statuses[-1].state == TrackingStatus.GOOD, 10))
+        self.assertTrue(sds.wait_until(lambda: updates[-1].session == statuses[-1].session, 10))
         for node in ('/tracking_node', '/mapping_node'):
             self.assertIsNotNone(sds.node_pid(node), node + ' died')
 
