@@ -44,7 +44,7 @@ class TrackingNode {
       : config_(std::move(config)), params_(config_.node), it_(nh), odom_(params_.map_z_up) {
     session_ = newSession();
     if (config_.calibration) setCamera(*config_.calibration);
-    subscribeImages(nh, pnh);
+    subscribeImages(nh);
     info_sub_ = nh.subscribe("camera_info", 5, &TrackingNode::onCameraInfo, this);
     ros::SubscribeOptions options = ros::SubscribeOptions::create<scale_drift_slam::MapUpdate>(
         "map_updates", 20,
@@ -65,9 +65,12 @@ class TrackingNode {
     path_.header.frame_id = params_.frames.map;
     update_spinner_.start();
   }
+  ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
+  TrackingNode(const TrackingNode&) = delete;
+  TrackingNode& operator=(const TrackingNode&) = delete;
 
  private:
-  void subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+  void subscribeImages(ros::NodeHandle& nh) {
     const std::string topic = nh.resolveName("image");
     image_topic_ = topic;
     if (params_.transport == "compressed") {  // decoded here: Debian ships no compressed plugin
@@ -275,6 +278,7 @@ class TrackingNode {
 
   ros_params::TrackingNodeConfig config_;
   const ros_params::TrackingNodeParams& params_;
+  ros::CallbackQueue update_queue_;  // outlives the subscription that uses it
   image_transport::ImageTransport it_;
   image_transport::Subscriber image_sub_;
   image_transport::Publisher debug_pub_;
@@ -284,8 +288,6 @@ class TrackingNode {
   std::string image_topic_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
-  ros::CallbackQueue update_queue_;
-  ros::AsyncSpinner update_spinner_{1, &update_queue_};
 
   geometry::CameraCalibration calibration_;
   std::shared_ptr<const geometry::CameraModel> camera_;
@@ -299,6 +301,7 @@ class TrackingNode {
   std::optional<tracking::TrackingState> last_state_;
   nav_msgs::Path path_;
   int frames_since_path_ = 0;
+  ros::AsyncSpinner update_spinner_{1, &update_queue_};  // the map-update thread
 };
 
 }  // namespace
