@@ -17,9 +17,10 @@ sensor_msgs::Image messageOf(const cv::Mat& image, const std::string& encoding, 
   msg.height = static_cast<std::uint32_t>(image.rows);
   msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize() + padding);
   msg.data.assign(static_cast<std::size_t>(msg.step) * msg.height, 0);
-  for (int y = 0; y < image.rows; ++y)
+  for (int y = 0; y < image.rows; ++y) {
     std::memcpy(&msg.data[static_cast<std::size_t>(y) * msg.step], image.ptr(y),
                 image.cols * image.elemSize());
+  }
   return msg;
 }
 
