@@ -68,3 +68,8 @@ sds_ros_environment() {
   export ROS_LOG_DIR="$ROS_HOME/log"
   mkdir -p "$ROS_LOG_DIR"
 }
+
+# A free TCP port for a ROS master (never the default 11311: other checkouts may run tests).
+sds_free_port() {
+  /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("localhost", 0)); print(s.getsockname()[1])'
+}

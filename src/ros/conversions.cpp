@@ -85,6 +85,18 @@ geometry::SE3 fromTransformMsg(const geometry_msgs::Transform& transform) {
       Eigen::Vector3d(transform.translation.x, transform.translation.y, transform.translation.z));
 }
 
+geometry_msgs::TransformStamped toTransformStampedMsg(const geometry::SE3& T_parent_child,
+                                                      const ros::Time& stamp,
+                                                      const std::string& parent,
+                                                      const std::string& child) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform = toTransformMsg(T_parent_child);
+  return t;
+}
+
 scale_drift_slam::Sim3 toSim3Msg(const geometry::Sim3& S) {
   scale_drift_slam::Sim3 msg;
   msg.rotation = toQuaternionMsg(S.rotation());

@@ -138,6 +138,10 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   }
   if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
   result.state = state_;
+  if (result.has_pose) {
+    for (const Measurement& m : previous_measurements_)
+      result.tracked_px.push_back(m.px);
+  }
   result.times.total = total.lapMs();
   result.times.cpu = threadCpuMs() - cpu_start;
   return result;

@@ -14,6 +14,12 @@ TEST(Conversions, PoseAndTransformRoundTrip) {
   const geometry::SE3 T = geometry::SE3::exp(xi);
   EXPECT_LT((fromPoseMsg(toPoseMsg(T)).matrix() - T.matrix()).norm(), 1e-15);
   EXPECT_LT((fromTransformMsg(toTransformMsg(T)).matrix() - T.matrix()).norm(), 1e-15);
+  const geometry_msgs::TransformStamped stamped =
+      toTransformStampedMsg(T, ros::Time(12.5), "map", "odom");
+  EXPECT_EQ(stamped.header.frame_id, "map");
+  EXPECT_EQ(stamped.child_frame_id, "odom");
+  EXPECT_EQ(stamped.header.stamp.toSec(), 12.5);
+  EXPECT_LT((fromTransformMsg(stamped.transform).matrix() - T.matrix()).norm(), 1e-15);
 }
 
 TEST(Conversions, Sim3RoundTripAndBadScale) {

@@ -4,6 +4,7 @@
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/CameraInfo.h>
 
 #include "scale_drift_slam/Sim3.h"
@@ -23,6 +24,11 @@ geometry_msgs::Pose toPoseMsg(const geometry::SE3& T);
 geometry::SE3 fromPoseMsg(const geometry_msgs::Pose& pose);
 geometry_msgs::Transform toTransformMsg(const geometry::SE3& T);
 geometry::SE3 fromTransformMsg(const geometry_msgs::Transform& transform);
+/// T_parent_child as a tf message (maps child-frame points into the parent frame).
+geometry_msgs::TransformStamped toTransformStampedMsg(const geometry::SE3& T_parent_child,
+                                                      const ros::Time& stamp,
+                                                      const std::string& parent,
+                                                      const std::string& child);
 scale_drift_slam::Sim3 toSim3Msg(const geometry::Sim3& S);
 /// Throws std::invalid_argument for a non-positive or non-finite scale.
 geometry::Sim3 fromSim3Msg(const scale_drift_slam::Sim3& msg);

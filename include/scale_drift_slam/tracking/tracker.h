@@ -68,6 +68,7 @@ struct FrameResult {
   bool has_pose = false;  ///< T_cam_world is an estimate for this frame.
   geometry::SE3 T_cam_world;
   int num_visible = 0, num_found = 0, num_inliers = 0;
+  std::vector<Eigen::Vector2d> tracked_px;      ///< Image positions of the inlier map points.
   std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
   /// The newest keyframe when the frame was tracked: the frame's pose moves with its loop
   /// corrections (mapping::CorrectedTrajectory).

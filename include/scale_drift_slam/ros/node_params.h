@@ -1,0 +1,82 @@
+#pragma once
+// The nodes' parameters, read from the private namespace and validated in one place. Each node
+// has a typed struct of its own settings; the SLAM's parameters are the core's
+// mapping::SlamParams: the YAML file `~config` (config/default.yaml layout; defaults without it),
+// then individual overrides `~<section>/<key>` (e.g. `~tracker/good_inliers: 40`,
+// `~window_ba/window_size: 8`), parsed and validated by the core (io/slam_params_io.h). Any
+// problem is a std::runtime_error naming the parameter, which the node reports with ROS_FATAL
+// before it exits. doc/ros.md lists every parameter.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <ros/node_handle.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include "scale_drift_slam/geometry/camera_calibration.h"
+#include "scale_drift_slam/mapping/slam_system.h"
+
+namespace scale_drift_slam::ros_params {
+
+struct FrameNames {
+  std::string map = "map";
+  std::string odom = "odom";
+  std::string camera = "camera_link";            ///< The camera body (x forward, z up).
+  std::string optical = "camera_optical_frame";  ///< The camera optical frame (z forward).
+};
+
+/// tracking_node's own settings.
+struct TrackingNodeParams {
+  std::string config_file;        ///< SLAM parameters YAML; empty: the defaults.
+  std::string calibration_file;   ///< Calibration YAML; empty: from CameraInfo.
+  std::string transport = "raw";  ///< raw, compressed, or another installed image_transport plugin.
+  int image_queue_size = 5;       ///< Images waiting while a frame is tracked (older are dropped).
+  FrameNames frames;
+  bool map_z_up = true;  ///< map = the first camera's body axes (upright), else its optical axes.
+  bool publish_optical_transform = true;  ///< Static camera -> optical transform.
+  int path_publish_every = 5;             ///< Frames between nav_msgs/Path messages.
+  int path_max_poses = 20000;             ///< Oldest poses are dropped beyond this.
+  void validate() const;
+};
+
+/// mapping_node's own settings.
+struct MappingNodeParams {
+  std::string config_file;
+  std::string map_frame = "map";
+  bool map_z_up = true;           ///< Must match the tracking node's.
+  std::string trajectory_file;    ///< Default path of ~save_trajectory.
+  int keyframe_queue_size = 100;  ///< Keyframes waiting for the window BA.
+  double marker_scale = 0.05;     ///< Keyframe frustum size in map units (median depth 1 at start).
+  void validate() const;
+};
+
+struct TrackingNodeConfig {
+  TrackingNodeParams node;
+  mapping::SlamParams slam;
+  std::optional<geometry::CameraCalibration> calibration;  ///< From calibration_file.
+  std::vector<std::string> unknown;  ///< Private parameters nobody reads (warned about).
+};
+
+struct MappingNodeConfig {
+  MappingNodeParams node;
+  mapping::SlamParams slam;
+  std::vector<std::string> unknown;
+};
+
+/// Reads everything from the private namespace given as one XmlRpc struct (what
+/// NodeHandle::getParam returns for the namespace). Throws std::runtime_error naming the
+/// parameter: wrong type, invalid value, unreadable or invalid ~config or ~calibration_file.
+TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params);
+MappingNodeConfig mappingNodeConfig(const XmlRpc::XmlRpcValue& private_params);
+/// The SLAM parameters: ~config (or defaults), then the ~<section>/<key> overrides.
+mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params);
+
+/// All parameters of the node's private namespace (an empty struct when there are none).
+XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh);
+
+/// For the start-up log: every setting, one per line.
+std::string describe(const TrackingNodeConfig& config);
+std::string describe(const MappingNodeConfig& config);
+
+}  // namespace scale_drift_slam::ros_params

@@ -1,0 +1,282 @@
+#include "scale_drift_slam/ros/node_params.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+
+#include "scale_drift_slam/io/calibration_io.h"
+#include "scale_drift_slam/io/slam_params_io.h"
+
+namespace scale_drift_slam::ros_params {
+namespace {
+
+using XmlRpc::XmlRpcValue;
+
+std::string kindName(XmlRpcValue::Type type) {
+  switch (type) {
+    case XmlRpcValue::TypeBoolean:
+      return "a bool";
+    case XmlRpcValue::TypeInt:
+      return "an int";
+    case XmlRpcValue::TypeDouble:
+      return "a double";
+    case XmlRpcValue::TypeString:
+      return "a string";
+    case XmlRpcValue::TypeStruct:
+      return "a namespace";
+    case XmlRpcValue::TypeArray:
+      return "a list";
+    default:
+      return "an unsupported kind of value";
+  }
+}
+
+[[noreturn]] void fail(const std::string& key, const std::string& reason) {
+  throw std::runtime_error("parameter ~" + key + ": " + reason);
+}
+
+/// Reads `key` into `value` when present; its type must match (an int is taken as a double).
+class Reader {
+ public:
+  explicit Reader(const XmlRpcValue& params) : params_(params) {}
+
+  void read(const std::string& key, std::string* value) {
+    if (XmlRpcValue* v = find(key, XmlRpcValue::TypeString, "a string")) {
+      *value = static_cast<std::string>(*v);
+    }
+  }
+  void read(const std::string& key, int* value) {
+    if (XmlRpcValue* v = find(key, XmlRpcValue::TypeInt, "an int")) *value = static_cast<int>(*v);
+  }
+  void read(const std::string& key, bool* value) {
+    if (XmlRpcValue* v = find(key, XmlRpcValue::TypeBoolean, "a bool")) {
+      *value = static_cast<bool>(*v);
+    }
+  }
+  void read(const std::string& key, double* value) {
+    known_.insert(key);
+    if (!params_.hasMember(key)) return;
+    XmlRpcValue& v = params_[key];
+    if (v.getType() == XmlRpcValue::TypeDouble) {
+      *value = static_cast<double>(v);
+    } else if (v.getType() == XmlRpcValue::TypeInt) {
+      *value = static_cast<int>(v);
+    } else {
+      fail(key, "must be a number, got " + kindName(v.getType()));
+    }
+  }
+  /// Names of the private namespace that were neither read nor are SLAM sections.
+  std::vector<std::string> unknown(const std::set<std::string>& sections) {
+    std::vector<std::string> names;
+    for (auto it = params_.begin(); it != params_.end(); ++it) {
+      if (!known_.count(it->first) && !sections.count(it->first)) names.push_back("~" + it->first);
+    }
+    return names;
+  }
+
+ private:
+  XmlRpcValue* find(const std::string& key, XmlRpcValue::Type type, const std::string& kind) {
+    known_.insert(key);
+    if (!params_.hasMember(key)) return nullptr;
+    XmlRpcValue& v = params_[key];
+    if (v.getType() != type) fail(key, "must be " + kind + ", got " + kindName(v.getType()));
+    return &v;
+  }
+
+  XmlRpcValue params_;  // a copy: XmlRpcValue's accessors are not const
+  std::set<std::string> known_;
+};
+
+/// The sections of the SLAM parameter file (tracker, features, ..., window_ba, mapper, system).
+std::set<std::string> slamSections() {
+  std::set<std::string> sections;
+  const YAML::Node defaults = YAML::Load(io::formatSlamParams(mapping::SlamParams{}));
+  for (const auto& entry : defaults)
+    sections.insert(entry.first.as<std::string>());
+  return sections;
+}
+
+std::string yamlScalar(const std::string& key, XmlRpcValue& v) {
+  switch (v.getType()) {
+    case XmlRpcValue::TypeBoolean:
+      return static_cast<bool>(v) ? "true" : "false";
+    case XmlRpcValue::TypeInt:
+      return std::to_string(static_cast<int>(v));
+    case XmlRpcValue::TypeDouble: {
+      char text[64];
+      std::snprintf(text, sizeof(text), "%.17g", static_cast<double>(v));
+      return text;
+    }
+    case XmlRpcValue::TypeString:
+      return static_cast<std::string>(v);
+    default:
+      fail(key, "must be a single value, got " + kindName(v.getType()));
+  }
+}
+
+std::string readFile(const std::string& key, const std::string& path) {
+  std::ifstream file(path);
+  if (!file) fail(key, "cannot read '" + path + "'");
+  std::stringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+void check(bool ok, const std::string& key, const std::string& reason) {
+  if (!ok) fail(key, reason);
+}
+
+void readFrames(Reader& reader, FrameNames* frames) {
+  reader.read("map_frame", &frames->map);
+  reader.read("odom_frame", &frames->odom);
+  reader.read("camera_frame", &frames->camera);
+  reader.read("optical_frame", &frames->optical);
+}
+
+}  // namespace
+
+void TrackingNodeParams::validate() const {
+  check(!transport.empty(), "transport", "must not be empty (raw or compressed)");
+  check(image_queue_size >= 1, "image_queue_size", "must be >= 1");
+  check(path_publish_every >= 1, "path_publish_every", "must be >= 1");
+  check(path_max_poses >= 1, "path_max_poses", "must be >= 1");
+  const std::vector<std::pair<std::string, std::string>> names = {
+      {"map_frame", frames.map},
+      {"odom_frame", frames.odom},
+      {"camera_frame", frames.camera},
+      {"optical_frame", frames.optical}};
+  std::set<std::string> distinct;
+  for (const auto& [key, name] : names) {
+    check(!name.empty() && name[0] != '/', key, "must be a non-empty frame name without '/'");
+    check(distinct.insert(name).second, key, "'" + name + "' is used for two frames");
+  }
+}
+
+void MappingNodeParams::validate() const {
+  check(!map_frame.empty() && map_frame[0] != '/', "map_frame",
+        "must be a non-empty frame name without '/'");
+  check(keyframe_queue_size >= 1, "keyframe_queue_size", "must be >= 1");
+  check(std::isfinite(marker_scale) && marker_scale > 0.0, "marker_scale", "must be > 0");
+}
+
+mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params) {
+  XmlRpcValue params = private_params;
+  std::string config_file;
+  Reader(params).read("config", &config_file);
+  const std::string origin = config_file.empty() ? "(defaults)" : "'" + config_file + "'";
+  YAML::Node merged;
+  try {
+    merged = config_file.empty() ? YAML::Node(YAML::NodeType::Map)
+                                 : YAML::Load(readFile("config", config_file));
+  } catch (const YAML::Exception& e) {
+    fail("config", "'" + config_file + "' is not YAML: " + e.what());
+  }
+  if (!merged.IsMap()) merged = YAML::Node(YAML::NodeType::Map);
+  bool overridden = false;
+  for (const std::string& section : slamSections()) {
+    if (!params.hasMember(section)) continue;
+    XmlRpcValue& values = params[section];
+    if (values.getType() != XmlRpcValue::TypeStruct) {
+      fail(section,
+           "must be a namespace of " + section + " parameters, got " + kindName(values.getType()));
+    }
+    for (auto it = values.begin(); it != values.end(); ++it) {
+      merged[section][it->first] = yamlScalar(section + "/" + it->first, it->second);
+      overridden = true;
+    }
+  }
+  try {
+    return io::parseSlamParams(YAML::Dump(merged),
+                               origin + (overridden ? " with ~<section>/<key> overrides" : ""));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("SLAM ") + e.what());
+  }
+}
+
+TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params) {
+  TrackingNodeConfig config;
+  Reader reader(private_params);
+  TrackingNodeParams& p = config.node;
+  reader.read("config", &p.config_file);
+  reader.read("calibration_file", &p.calibration_file);
+  reader.read("transport", &p.transport);
+  reader.read("image_queue_size", &p.image_queue_size);
+  readFrames(reader, &p.frames);
+  reader.read("map_z_up", &p.map_z_up);
+  reader.read("publish_optical_transform", &p.publish_optical_transform);
+  reader.read("path_publish_every", &p.path_publish_every);
+  reader.read("path_max_poses", &p.path_max_poses);
+  p.validate();
+  config.slam = slamParams(private_params);
+  if (!p.calibration_file.empty()) {
+    try {
+      config.calibration = io::loadCalibrationYaml(p.calibration_file);
+    } catch (const std::exception& e) {
+      fail("calibration_file", e.what());
+    }
+  }
+  config.unknown = reader.unknown(slamSections());
+  return config;
+}
+
+MappingNodeConfig mappingNodeConfig(const XmlRpc::XmlRpcValue& private_params) {
+  MappingNodeConfig config;
+  Reader reader(private_params);
+  MappingNodeParams& p = config.node;
+  reader.read("config", &p.config_file);
+  reader.read("map_frame", &p.map_frame);
+  reader.read("map_z_up", &p.map_z_up);
+  reader.read("trajectory_file", &p.trajectory_file);
+  reader.read("keyframe_queue_size", &p.keyframe_queue_size);
+  reader.read("marker_scale", &p.marker_scale);
+  p.validate();
+  config.slam = slamParams(private_params);
+  config.unknown = reader.unknown(slamSections());
+  return config;
+}
+
+XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh) {
+  XmlRpcValue params;
+  if (!private_nh.getParam(private_nh.getNamespace(), params) ||
+      params.getType() != XmlRpcValue::TypeStruct) {
+    params = XmlRpcValue();
+    params.begin();  // an empty struct
+  }
+  return params;
+}
+
+std::string describe(const TrackingNodeConfig& c) {
+  const TrackingNodeParams& p = c.node;
+  std::ostringstream out;
+  out << "config: " << (p.config_file.empty() ? "(defaults)" : p.config_file) << "\n"
+      << "calibration_file: "
+      << (p.calibration_file.empty() ? "(none: CameraInfo)" : p.calibration_file) << "\n";
+  if (c.calibration) out << "camera: " << c.calibration->describe() << "\n";
+  out << "transport: " << p.transport << "\nimage_queue_size: " << p.image_queue_size
+      << "\nframes: map " << p.frames.map << ", odom " << p.frames.odom << ", camera "
+      << p.frames.camera << ", optical " << p.frames.optical << "\nmap_z_up: " << p.map_z_up
+      << "\npublish_optical_transform: " << p.publish_optical_transform
+      << "\npath_publish_every: " << p.path_publish_every
+      << "\npath_max_poses: " << p.path_max_poses << "\n# SLAM parameters\n"
+      << io::formatSlamParams(c.slam);
+  return out.str();
+}
+
+std::string describe(const MappingNodeConfig& c) {
+  const MappingNodeParams& p = c.node;
+  std::ostringstream out;
+  out << "config: " << (p.config_file.empty() ? "(defaults)" : p.config_file)
+      << "\nmap_frame: " << p.map_frame << "\nmap_z_up: " << p.map_z_up
+      << "\ntrajectory_file: " << (p.trajectory_file.empty() ? "(none)" : p.trajectory_file)
+      << "\nkeyframe_queue_size: " << p.keyframe_queue_size << "\nmarker_scale: " << p.marker_scale
+      << "\n# SLAM parameters\n"
+      << io::formatSlamParams(c.slam);
+  return out.str();
+}
+
+}  // namespace scale_drift_slam::ros_params

@@ -1,0 +1,195 @@
+#include "scale_drift_slam/ros/slam_messages.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <sensor_msgs/image_encodings.h>
+
+#include "scale_drift_slam/ros/conversions.h"
+#include "scale_drift_slam/ros/image_conversions.h"
+
+namespace scale_drift_slam::ros_conversions {
+namespace {
+
+bool finite(const Eigen::Vector3d& v) {
+  return v.allFinite();
+}
+
+geometry::SE3 checkedPose(const geometry_msgs::Pose& pose, const std::string& what) {
+  const geometry_msgs::Quaternion& q = pose.orientation;
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(norm) || norm < 1e-6 || !std::isfinite(pose.position.x) ||
+      !std::isfinite(pose.position.y) || !std::isfinite(pose.position.z)) {
+    throw std::invalid_argument(what + " is not a valid pose (non-finite or zero quaternion)");
+  }
+  return fromPoseMsg(pose);
+}
+
+}  // namespace
+
+scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe) {
+  scale_drift_slam::Keyframe msg;
+  msg.header.stamp = ros::Time(keyframe.keyframe.timestamp);
+  msg.id = keyframe.keyframe.id;
+  msg.T_kf_world = toPoseMsg(keyframe.keyframe.T_kf_world);
+  msg.map_version = keyframe.map_version;
+  msg.observations.reserve(keyframe.keyframe.observations.size());
+  for (const map::Observation& o : keyframe.keyframe.observations) {
+    scale_drift_slam::Observation observation;
+    observation.point_id = o.point_id;
+    observation.x = o.xy.x();
+    observation.y = o.xy.y();
+    msg.observations.push_back(observation);
+  }
+  msg.new_points.reserve(keyframe.new_points.size());
+  for (const map::NewMapPoint& p : keyframe.new_points) {
+    scale_drift_slam::NewPoint point;
+    point.id = p.id;
+    point.position.x = p.p_world.x();
+    point.position.y = p.p_world.y();
+    point.position.z = p.p_world.z();
+    point.reference_keyframe = p.reference_keyframe;
+    msg.new_points.push_back(point);
+  }
+  msg.earlier_observations.reserve(keyframe.earlier_observations.size());
+  for (const map::KeyframeObservation& o : keyframe.earlier_observations) {
+    scale_drift_slam::KeyframeObservation observation;
+    observation.keyframe_id = o.keyframe_id;
+    observation.point_id = o.point_id;
+    observation.x = o.xy.x();
+    observation.y = o.xy.y();
+    msg.earlier_observations.push_back(observation);
+  }
+  if (!keyframe.image.empty()) msg.image = toMono8Msg(keyframe.image, msg.header);
+  return msg;
+}
+
+map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg) {
+  map::KeyframeMessage keyframe;
+  keyframe.keyframe.id = msg.id;
+  keyframe.keyframe.timestamp = msg.header.stamp.toSec();
+  keyframe.keyframe.T_kf_world =
+      checkedPose(msg.T_kf_world, "keyframe " + std::to_string(msg.id) + " T_kf_world");
+  keyframe.map_version = msg.map_version;
+  keyframe.keyframe.observations.reserve(msg.observations.size());
+  for (const scale_drift_slam::Observation& o : msg.observations) {
+    keyframe.keyframe.observations.push_back({o.point_id, Eigen::Vector2d(o.x, o.y)});
+  }
+  keyframe.new_points.reserve(msg.new_points.size());
+  for (const scale_drift_slam::NewPoint& p : msg.new_points) {
+    const Eigen::Vector3d position(p.position.x, p.position.y, p.position.z);
+    if (!finite(position)) {
+      throw std::invalid_argument("keyframe " + std::to_string(msg.id) + ": new point " +
+                                  std::to_string(p.id) + " has a non-finite position");
+    }
+    keyframe.new_points.push_back({p.id, position, p.reference_keyframe});
+  }
+  keyframe.earlier_observations.reserve(msg.earlier_observations.size());
+  for (const scale_drift_slam::KeyframeObservation& o : msg.earlier_observations) {
+    keyframe.earlier_observations.push_back({o.keyframe_id, o.point_id, Eigen::Vector2d(o.x, o.y)});
+  }
+  if (!msg.image.data.empty()) keyframe.image = fromMono8Msg(msg.image);
+  return keyframe;
+}
+
+scale_drift_slam::MapUpdate toMapUpdateMsg(const map::MapUpdate& update) {
+  scale_drift_slam::MapUpdate msg;
+  msg.map_version = update.map_version;
+  msg.has_loop_correction = update.S_new_old.has_value();
+  msg.S_new_old = toSim3Msg(update.S_new_old.value_or(geometry::Sim3()));
+  msg.keyframe_ids.reserve(update.keyframe_poses.size());
+  msg.keyframe_poses.reserve(update.keyframe_poses.size());
+  for (const auto& [id, T_kf_world] : update.keyframe_poses) {
+    msg.keyframe_ids.push_back(id);
+    msg.keyframe_poses.push_back(toPoseMsg(T_kf_world));
+  }
+  msg.point_ids.reserve(update.point_positions.size());
+  msg.point_positions.reserve(update.point_positions.size());
+  for (const auto& [id, p_world] : update.point_positions) {
+    msg.point_ids.push_back(id);
+    geometry_msgs::Point32 point;
+    point.x = static_cast<float>(p_world.x());
+    point.y = static_cast<float>(p_world.y());
+    point.z = static_cast<float>(p_world.z());
+    msg.point_positions.push_back(point);
+  }
+  msg.removed_points = update.removed_points;
+  for (const auto& [id, C] : update.keyframe_corrections) {
+    msg.corrected_keyframe_ids.push_back(id);
+    msg.keyframe_corrections.push_back(toSim3Msg(C));
+  }
+  return msg;
+}
+
+map::MapUpdate fromMapUpdateMsg(const scale_drift_slam::MapUpdate& msg) {
+  if (msg.keyframe_ids.size() != msg.keyframe_poses.size() ||
+      msg.point_ids.size() != msg.point_positions.size() ||
+      msg.corrected_keyframe_ids.size() != msg.keyframe_corrections.size()) {
+    throw std::invalid_argument(
+        "MapUpdate arrays of different lengths (keyframe_ids/keyframe_poses, "
+        "point_ids/point_positions or corrected_keyframe_ids/keyframe_corrections)");
+  }
+  map::MapUpdate update;
+  update.map_version = msg.map_version;
+  if (msg.has_loop_correction) update.S_new_old = fromSim3Msg(msg.S_new_old);
+  update.keyframe_poses.reserve(msg.keyframe_ids.size());
+  for (std::size_t i = 0; i < msg.keyframe_ids.size(); ++i) {
+    update.keyframe_poses.emplace_back(
+        msg.keyframe_ids[i],
+        checkedPose(msg.keyframe_poses[i],
+                    "MapUpdate pose of keyframe " + std::to_string(msg.keyframe_ids[i])));
+  }
+  update.point_positions.reserve(msg.point_ids.size());
+  for (std::size_t i = 0; i < msg.point_ids.size(); ++i) {
+    const geometry_msgs::Point32& p = msg.point_positions[i];
+    const Eigen::Vector3d position(p.x, p.y, p.z);
+    if (!finite(position)) {
+      throw std::invalid_argument("MapUpdate: point " + std::to_string(msg.point_ids[i]) +
+                                  " has a non-finite position");
+    }
+    update.point_positions.emplace_back(msg.point_ids[i], position);
+  }
+  update.removed_points = msg.removed_points;
+  for (std::size_t i = 0; i < msg.corrected_keyframe_ids.size(); ++i) {
+    update.keyframe_corrections.emplace_back(msg.corrected_keyframe_ids[i],
+                                             fromSim3Msg(msg.keyframe_corrections[i]));
+  }
+  return update;
+}
+
+scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result) {
+  scale_drift_slam::TrackingStatus msg;
+  switch (result.state) {
+    case tracking::TrackingState::kInitializing:
+      msg.state = scale_drift_slam::TrackingStatus::INITIALIZING;
+      break;
+    case tracking::TrackingState::kGood:
+      msg.state = scale_drift_slam::TrackingStatus::GOOD;
+      break;
+    case tracking::TrackingState::kWeak:
+      msg.state = scale_drift_slam::TrackingStatus::WEAK;
+      break;
+    case tracking::TrackingState::kLost:
+      msg.state = scale_drift_slam::TrackingStatus::LOST;
+      break;
+  }
+  msg.state_name = tracking::trackingStateName(result.state);
+  msg.rejected = result.rejected;
+  msg.has_pose = result.has_pose;
+  msg.visible = static_cast<std::uint32_t>(std::max(0, result.num_visible));
+  msg.matches = static_cast<std::uint32_t>(std::max(0, result.num_found));
+  msg.inliers = static_cast<std::uint32_t>(std::max(0, result.num_inliers));
+  msg.prepare_ms = static_cast<float>(result.times.prepare);
+  msg.flow_ms = static_cast<float>(result.times.flow);
+  msg.search_ms = static_cast<float>(result.times.search);
+  msg.motion_ba_ms = static_cast<float>(result.times.motion_ba);
+  msg.filters_ms = static_cast<float>(result.times.filters);
+  msg.keyframe_ms = static_cast<float>(result.times.keyframe);
+  msg.total_ms = static_cast<float>(result.times.total);
+  msg.cpu_ms = static_cast<float>(result.times.cpu);
+  msg.message = result.message;
+  return msg;
+}
+
+}  // namespace scale_drift_slam::ros_conversions

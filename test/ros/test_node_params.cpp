@@ -1,0 +1,132 @@
+// The nodes' parameters: defaults, ~config plus ~<section>/<key> overrides parsed by the core,
+// and every kind of bad value refused with the parameter's name.
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "scale_drift_slam/io/slam_params_io.h"
+#include "scale_drift_slam/ros/node_params.h"
+
+namespace scale_drift_slam::ros_params {
+namespace {
+
+using XmlRpc::XmlRpcValue;
+
+XmlRpcValue emptyStruct() {
+  XmlRpcValue v;
+  v.begin();
+  return v;
+}
+
+std::string writeFile(const std::string& name, const std::string& text) {
+  std::string path = ::testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+/// The message of the std::runtime_error `f` throws ("" when it does not throw).
+template <typename F>
+std::string errorOf(F f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(NodeParams, DefaultsWithoutParameters) {
+  const TrackingNodeConfig tracking = trackingNodeConfig(emptyStruct());
+  EXPECT_EQ(tracking.node.frames.map, "map");
+  EXPECT_EQ(tracking.node.frames.optical, "camera_optical_frame");
+  EXPECT_TRUE(tracking.node.map_z_up);
+  EXPECT_FALSE(tracking.calibration.has_value());
+  EXPECT_TRUE(tracking.unknown.empty());
+  EXPECT_EQ(io::formatSlamParams(tracking.slam), io::formatSlamParams(mapping::SlamParams{}));
+  const MappingNodeConfig mapping = mappingNodeConfig(emptyStruct());
+  EXPECT_EQ(mapping.node.map_frame, "map");
+  EXPECT_NE(describe(mapping).find("window_ba"), std::string::npos);
+  EXPECT_NE(describe(tracking).find("camera_optical_frame"), std::string::npos);
+}
+
+TEST(NodeParams, ConfigFileThenOverrides) {
+  XmlRpcValue p = emptyStruct();
+  p["config"] =
+      writeFile("sds_params.yaml", "tracker:\n  good_inliers: 60\nsearch:\n  min_ncc: 0.7\n");
+  p["tracker"]["min_inliers"] = 20;
+  p["search"]["max_radius_px"] = 35;  // an int for a double
+  p["flow"]["method"] = std::string("dis");
+  p["window_ba"]["window_size"] = 8;
+  p["mapper"]["run_window_ba"] = false;
+  p["map_frame"] = std::string("world");
+  p["image_queue_size"] = 3;
+  p["something_else"] = 1;
+  const TrackingNodeConfig c = trackingNodeConfig(p);
+  EXPECT_EQ(c.slam.tracker.good_inliers, 60);  // from the file
+  EXPECT_DOUBLE_EQ(c.slam.tracker.search.min_ncc, 0.7);
+  EXPECT_EQ(c.slam.tracker.min_inliers, 20);  // overrides
+  EXPECT_DOUBLE_EQ(c.slam.tracker.search.max_radius_px, 35.0);
+  EXPECT_EQ(c.slam.tracker.motion_prior.flow.method, tracking::FlowMethod::kDis);
+  EXPECT_EQ(c.slam.mapper.window.window_size, 8);
+  EXPECT_FALSE(c.slam.mapper.run_window_ba);
+  EXPECT_EQ(c.node.frames.map, "world");
+  EXPECT_EQ(c.node.image_queue_size, 3);
+  ASSERT_EQ(c.unknown.size(), 1u);
+  EXPECT_EQ(c.unknown[0], "~something_else");
+  // A double written with all its digits comes back exactly.
+  XmlRpcValue q = emptyStruct();
+  q["motion_prior"]["min_rotation_sigma"] = 0.1 + 0.2;
+  EXPECT_EQ(slamParams(q).tracker.motion_prior.min_rotation_sigma, 0.1 + 0.2);
+}
+
+TEST(NodeParams, BadValuesNameTheParameter) {
+  const auto tracking_error = [](XmlRpcValue p) { return errorOf([&] { trackingNodeConfig(p); }); };
+  const auto mapping_error = [](XmlRpcValue p) { return errorOf([&] { mappingNodeConfig(p); }); };
+  XmlRpcValue p = emptyStruct();
+  p["tracker"]["good_inliers"] = -3;
+  EXPECT_NE(tracking_error(p).find("good_inliers"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["search"]["no_such_key"] = 1;
+  EXPECT_NE(tracking_error(p).find("no_such_key"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["search"] = 3;
+  EXPECT_NE(tracking_error(p).find("~search"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["image_queue_size"] = std::string("many");
+  EXPECT_NE(tracking_error(p).find("~image_queue_size: must be an int"), std::string::npos)
+      << tracking_error(p);
+  p = emptyStruct();
+  p["image_queue_size"] = 0;
+  EXPECT_NE(tracking_error(p).find("~image_queue_size"), std::string::npos);
+  p = emptyStruct();
+  p["odom_frame"] = std::string("map");
+  EXPECT_NE(tracking_error(p).find("used for two frames"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["map_z_up"] = 1;
+  EXPECT_NE(tracking_error(p).find("~map_z_up: must be a bool"), std::string::npos);
+  p = emptyStruct();
+  p["config"] = std::string("/nonexistent/params.yaml");
+  EXPECT_NE(tracking_error(p).find("~config: cannot read '/nonexistent/params.yaml'"),
+            std::string::npos)
+      << tracking_error(p);
+  p = emptyStruct();
+  p["config"] = writeFile("sds_bad.yaml", "tracker: [1, 2\n");
+  EXPECT_NE(tracking_error(p).find("~config"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["calibration_file"] = writeFile(
+      "sds_nan_calibration.yaml",
+      "width: 640\nheight: 480\nfx: .nan\nfy: 500\ncx: 320\ncy: 240\ndistortion_model: plumb_bob\n"
+      "distortion: [0, 0, 0, 0, 0]\n");
+  EXPECT_NE(tracking_error(p).find("~calibration_file"), std::string::npos) << tracking_error(p);
+  p = emptyStruct();
+  p["window_ba"]["window_size"] = 0;
+  EXPECT_NE(mapping_error(p).find("window_size"), std::string::npos) << mapping_error(p);
+  p = emptyStruct();
+  p["marker_scale"] = -1.0;
+  EXPECT_NE(mapping_error(p).find("~marker_scale"), std::string::npos) << mapping_error(p);
+}
+
+}  // namespace
+}  // namespace scale_drift_slam::ros_params

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Every launch file parses with its documented arguments and starts the nodes it promises, with the
+# calibration and parameter files it names present; rviz/slam.rviz is valid YAML showing the map
+# cloud, markers, path, tf and debug image. Loads them with roslaunch's own loader (no master,
+# no process started). ~3 s.
+set -euo pipefail
+export ROS_HOME="${SDS_TEST_OUTPUT_DIR:?}/launch_files_ros_home"
+mkdir -p "$ROS_HOME"
+/usr/bin/python3 - "$(rospack find scale_drift_slam)" <<'PY'
+import os
+import sys
+
+import roslaunch.config
+import yaml
+
+pkg = sys.argv[1]
+
+
+def load(name, *args):
+    """Nodes (sorted names) and parameters of a launch file with arguments."""
+    config = roslaunch.config.load_config_default(
+        [(os.path.join(pkg, 'launch', name), list(args))], None, verbose=False)
+    nodes = sorted(n.namespace.rstrip('/') + '/' + n.name for n in config.nodes)
+    params = {key: p.value for key, p in config.params.items()}
+    for key, value in params.items():  # every file a launch file names exists
+        if key.endswith(('/calibration_file', '/config')) and value:
+            assert os.path.isfile(value), '%s %s: %s = %s is missing' % (name, args, key, value)
+    return nodes, params
+
+
+def check(expected, name, *args):
+    nodes, params = load(name, *args)
+    assert nodes == expected, '%s %s: nodes %s, expected %s' % (name, args, nodes, expected)
+    return params
+
+
+slam = ['/mapping_node', '/tracking_node']
+params = check(slam, 'slam.launch')
+assert params['/tracking_node/calibration_file'] == ''
+assert params['/tracking_node/map_frame'] == 'map'
+check(['/mapping_node', '/rviz', '/tracking_node'], 'slam.launch', 'rviz:=true')
+params = check(['/mapping_node', '/player', '/tracking_node'], 'bag.launch', 'bag:=/some.bag')
+assert params['/use_sim_time'] is True, 'bag.launch does not use simulated time'
+assert params['/tracking_node/image_queue_size'] == 100
+params = check(['/mapping_node', '/play_sequence', '/tracking_node'], 'demo.launch')
+assert params['/use_sim_time'] is True
+params = check(slam, 'euroc.launch')
+assert params['/tracking_node/calibration_file'].endswith('config/euroc_cam0.yaml')
+assert '/use_sim_time' not in params
+check(['/mapping_node', '/player', '/tracking_node'], 'euroc.launch', 'bag:=/MH_01_easy.bag')
+for camera in ('fr1', 'fr2', 'fr3'):
+    params = check(['/mapping_node', '/player', '/tracking_node'], 'tum.launch',
+                   'camera:=' + camera, 'bag:=/x.bag')
+    assert params['/tracking_node/calibration_file'].endswith('config/tum_%s.yaml' % camera)
+
+config = yaml.safe_load(open(os.path.join(pkg, 'rviz', 'slam.rviz')))
+displays = config['Visualization Manager']['Displays']
+topics = {d.get('Topic') or d.get('Marker Topic') or d.get('Image Topic') for d in displays}
+for topic in ('/map_cloud', '/map_markers', '/path', '/debug_image'):
+    assert topic in topics, 'rviz config shows no ' + topic
+assert 'rviz/TF' in {d['Class'] for d in displays}
+assert config['Visualization Manager']['Global Options']['Fixed Frame'] == 'map'
+print('launch files test passed')
+PY
