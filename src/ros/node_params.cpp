@@ -95,7 +95,8 @@ class Reader {
 /// The sections of the SLAM parameter file (tracker, features, ..., window_ba, mapper, system).
 std::set<std::string> slamSections() {
   std::set<std::string> sections;
-  const YAML::Node defaults = YAML::Load(io::formatSlamParams(mapping::SlamParams{}));
+  const mapping::SlamParams default_params;
+  const YAML::Node defaults = YAML::Load(io::formatSlamParams(default_params));
   for (const auto& entry : defaults)
     sections.insert(entry.first.as<std::string>());
   return sections;
