@@ -36,8 +36,9 @@ std::string LoopCorrectionStatistics::describe() const {
 void LoopCorrectionParams::validate() const {
   graph.validate();
   structure.validate();
-  if (covisibility_min_shared_points < 0) {
-    throw std::invalid_argument("loop correction: covisibility_min_shared_points must be >= 0");
+  if (covisibility_min_shared_points < 0 || covisibility_max_edges < 0) {
+    throw std::invalid_argument(
+        "loop correction: covisibility_min_shared_points and covisibility_max_edges must be >= 0");
   }
   if (!(loop_edge_weight > 0.0)) {
     throw std::invalid_argument("loop correction: loop_edge_weight must be > 0");
@@ -119,6 +120,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   // The graph over all keyframes, the oldest fixed (it defines the world frame).
   loop::PoseGraphBuilderOptions builder;
   builder.min_shared_points = p.covisibility_min_shared_points;
+  builder.max_covisibility_edges_per_keyframe = p.covisibility_max_edges;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
   const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges_, {oldest}, builder);
   stats.build_ms = msSince(start);
