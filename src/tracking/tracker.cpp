@@ -164,9 +164,10 @@ void Tracker::requestRelocalisation(double timestamp, const ImagePyramid& image,
                                     FrameResult* result) {
   if (relocalisation_ && frame_index_ - relocalisation_->frame_index <
                              static_cast<std::uint64_t>(params_.relocalisation_retry_frames)) {
-    return;  // one request at a time
+    relocalisation_->frames.push_back(image);  // one request at a time; keep the frames since
+    return;
   }
-  relocalisation_ = PendingRelocalisation{frame_index_, image};
+  relocalisation_ = PendingRelocalisation{frame_index_, {image}};
   map::RelocalisationRequest request;
   request.frame_index = frame_index_;
   request.timestamp = timestamp;
@@ -183,16 +184,28 @@ bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
   // predates a loop correction the tracker has applied since.
   if (!answer.success || state_ != TrackingState::kLost) return false;
   if (answer.map_version < last_loop_version_) return false;
-  std::vector<Measurement> found;
+  std::vector<map::PointId> ids;
+  std::vector<FlowSeed> seeds;
   for (const map::RelocalisationAnswer::FoundPoint& p : answer.points) {
-    if (map_.hasPoint(p.id)) found.push_back({p.id, p.px, p.xy});
+    if (!map_.hasPoint(p.id)) continue;
+    ids.push_back(p.id);
+    seeds.push_back({cv::Point2f(static_cast<float>(p.px.x()), static_cast<float>(p.px.y())),
+                     map_.point(p.id).p_world});
   }
-  if (static_cast<int>(found.size()) < params_.min_inliers) return false;
-  // Track the next frame from the relocalised one: the flow carries the found points over.
-  previous_measurements_ = std::move(found);
-  previous_image_ = pending.image;
-  T_previous_world_ = T_before_previous_world_ = answer.T_cam_world;
-  last_scene_depth_ = sceneDepth(answer.T_cam_world);
+  // The answer is about the requested frame; the camera has moved on since: carry the found
+  // points through the frames seen meanwhile to the last one, and track on from there.
+  const std::optional<MotionPriorEstimator::Carried> carried =
+      motion_prior_.carry(pending.frames, seeds, answer.T_cam_world, *camera_);
+  if (!carried || static_cast<int>(carried->px.size()) < params_.min_inliers) return false;
+  previous_measurements_.clear();
+  for (std::size_t i = 0; i < carried->px.size(); ++i) {
+    const Eigen::Vector2d px(carried->px[i].x, carried->px[i].y);
+    previous_measurements_.push_back(
+        {ids[carried->seed[i]], px, camera_->undistortToNormalized(px)});
+  }
+  previous_image_ = pending.frames.back();
+  T_previous_world_ = T_before_previous_world_ = carried->T_cam_world;
+  last_scene_depth_ = sceneDepth(carried->T_cam_world);
   resume_from_relocalisation_ = true;
   return true;
 }

@@ -146,7 +146,9 @@ class Tracker {
   std::uint64_t last_loop_version_ = 0;  ///< Map version of the last loop correction applied.
   struct PendingRelocalisation {
     std::uint64_t frame_index = 0;
-    ImagePyramid image;
+    /// The requested frame, then every frame tracked (in vain) since: the answer's points are
+    /// carried through them by flow.
+    std::vector<ImagePyramid> frames;
   };
   std::optional<PendingRelocalisation> relocalisation_;  ///< The request outstanding.
   bool resume_from_relocalisation_ = false;
