@@ -5,6 +5,9 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <opencv2/imgproc.hpp>
 
+#include "scale_drift_slam/ros/conversions.h"
+#include "scale_drift_slam/ros/frames.h"
+
 namespace scale_drift_slam::ros_visualization {
 namespace {
 
@@ -103,6 +106,51 @@ visualization_msgs::MarkerArray keyframeMarkers(
   visualization_msgs::MarkerArray markers;
   markers.markers = {finish(frustums, 2), finish(path, 2), finish(edges, 2)};
   return markers;
+}
+
+geometry_msgs::PoseStamped pathPose(const geometry::SE3& T_cam_world, double timestamp,
+                                    const geometry::SE3& T_map_world,
+                                    const std::string& map_frame) {
+  static const geometry::SE3 T_optical_body = ros_frames::bodyFromOptical().inverse();
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = ros::Time(timestamp);
+  pose.header.frame_id = map_frame;
+  pose.pose = ros_conversions::toPoseMsg(T_map_world * T_cam_world.inverse() * T_optical_body);
+  return pose;
+}
+
+CameraPath::CameraPath(const geometry::SE3& T_map_world, std::string map_frame,
+                       std::size_t max_poses)
+    : T_map_world_(T_map_world), max_poses_(max_poses) {
+  path_.header.frame_id = std::move(map_frame);
+}
+
+void CameraPath::add(double timestamp, const geometry::SE3& T_cam_world,
+                     std::optional<map::KeyframeId> reference_keyframe) {
+  trajectory_.add(timestamp, T_cam_world, reference_keyframe);
+  if (trajectory_.size() > 2 * max_poses_) trajectory_.keepNewest(max_poses_);
+  path_.poses.push_back(pathPose(T_cam_world, timestamp, T_map_world_, path_.header.frame_id));
+  if (path_.poses.size() > max_poses_) path_.poses.erase(path_.poses.begin());
+}
+
+void CameraPath::rebuild() {
+  const std::vector<map::CorrectedTrajectory::Frame>& frames = trajectory_.frames();
+  const std::size_t first = frames.size() > max_poses_ ? frames.size() - max_poses_ : 0;
+  path_.poses.clear();
+  for (std::size_t i = first; i < frames.size(); ++i) {
+    path_.poses.push_back(
+        pathPose(frames[i].T_cam_world, frames[i].timestamp, T_map_world_, path_.header.frame_id));
+  }
+}
+
+void CameraPath::clear() {
+  trajectory_.clear();
+  path_.poses.clear();
+}
+
+const nav_msgs::Path& CameraPath::message(const ros::Time& stamp) {
+  path_.header.stamp = stamp;
+  return path_;
 }
 
 visualization_msgs::MarkerArray deleteAllMarkers(const std_msgs::Header& header) {
