@@ -81,8 +81,13 @@ visualization_msgs::MarkerArray keyframeMarkers(
                                colour(0.2f, 0.4f, 1.0f));
   Marker path = lineMarker(header, "keyframe_path", Marker::LINE_STRIP, 0.1 * frustum_size,
                            colour(0.2f, 0.8f, 1.0f));
-  Marker edges = lineMarker(header, "loop_edges", Marker::LINE_LIST, 0.3 * frustum_size,
+  Marker edges = lineMarker(header, "loop_edges", Marker::LINE_LIST, 0.5 * frustum_size,
                             colour(1.0f, 0.2f, 0.2f));
+  // The keyframes a loop joins, as balls: a loop edge is often shorter than the path is wide.
+  Marker ends = lineMarker(header, "loop_edges", Marker::SPHERE_LIST, 2.0 * frustum_size,
+                           colour(1.0f, 0.2f, 0.2f));
+  ends.id = 1;
+  ends.scale.y = ends.scale.z = ends.scale.x;
   // Frustum corners in the camera's optical frame: apex at 0, image rectangle at depth d.
   const double d = frustum_size, w = 0.6 * frustum_size, h = 0.45 * frustum_size;
   const std::vector<Eigen::Vector3d> corners = {{-w, -h, d}, {w, -h, d}, {w, h, d}, {-w, h, d}};
@@ -99,12 +104,14 @@ visualization_msgs::MarkerArray keyframeMarkers(
   }
   for (const auto& [from, to] : loops) {
     if (!map.hasKeyframe(from) || !map.hasKeyframe(to)) continue;
-    edges.points.push_back(
-        toPoint(T_map_world * map.keyframe(from).T_kf_world.inverseTranslation()));
-    edges.points.push_back(toPoint(T_map_world * map.keyframe(to).T_kf_world.inverseTranslation()));
+    for (const map::KeyframeId id : {from, to}) {
+      edges.points.push_back(
+          toPoint(T_map_world * map.keyframe(id).T_kf_world.inverseTranslation()));
+    }
   }
+  ends.points = edges.points;
   visualization_msgs::MarkerArray markers;
-  markers.markers = {finish(frustums, 2), finish(path, 2), finish(edges, 2)};
+  markers.markers = {finish(frustums, 2), finish(path, 2), finish(edges, 2), finish(ends, 2)};
   return markers;
 }
 

@@ -54,7 +54,7 @@ TEST(Visualization, KeyframeMarkersAndLoopEdges) {
   header.frame_id = "map";
   using visualization_msgs::Marker;
   const auto markers = keyframeMarkers(m, {}, geometry::SE3(), header, 0.1).markers;
-  ASSERT_EQ(markers.size(), 3u);
+  ASSERT_EQ(markers.size(), 4u);
   EXPECT_EQ(markers[0].ns, "keyframes");
   EXPECT_EQ(markers[0].points.size(), 3u * 16u);  // 8 lines per frustum
   EXPECT_EQ(markers[1].ns, "keyframe_path");
@@ -62,9 +62,17 @@ TEST(Visualization, KeyframeMarkersAndLoopEdges) {
   EXPECT_NEAR(markers[1].points[2].x, 0.2, 1e-12);  // centre of keyframe 2
   EXPECT_EQ(markers[2].ns, "loop_edges");
   EXPECT_EQ(markers[2].action, Marker::DELETE);  // no loops yet
+  EXPECT_EQ(markers[3].ns, "loop_edges");
+  EXPECT_EQ(markers[3].id, 1);
+  EXPECT_EQ(markers[3].action, Marker::DELETE);
   const auto with_loop = keyframeMarkers(m, {{2, 0}, {5, 0}}, geometry::SE3(), header, 0.1);
   EXPECT_EQ(with_loop.markers[2].action, Marker::ADD);
   EXPECT_EQ(with_loop.markers[2].points.size(), 2u);  // the edge to an unknown keyframe is skipped
+  EXPECT_NEAR(with_loop.markers[2].points[0].x, 0.2, 1e-12);  // keyframe 2 to keyframe 0
+  EXPECT_NEAR(with_loop.markers[2].points[1].x, 0.0, 1e-12);
+  EXPECT_EQ(with_loop.markers[3].type, Marker::SPHERE_LIST);
+  EXPECT_EQ(with_loop.markers[3].points.size(), 2u);
+  EXPECT_DOUBLE_EQ(with_loop.markers[3].scale.z, 0.2);
   EXPECT_EQ(deleteAllMarkers(header).markers[0].action, Marker::DELETEALL);
 }
 

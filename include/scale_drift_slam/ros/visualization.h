@@ -27,8 +27,9 @@ sensor_msgs::PointCloud2 mapCloud(const map::Map& map, const geometry::SE3& T_ma
                                   const std_msgs::Header& header);
 
 /// Namespaces "keyframes" (a small camera frustum per keyframe, LINE_LIST), "keyframe_path"
-/// (keyframe centres in id order, LINE_STRIP) and "loop_edges" (one line per loop constraint
-/// between keyframe centres, LINE_LIST); a namespace with nothing to show is deleted.
+/// (keyframe centres in id order, LINE_STRIP) and "loop_edges" (id 0: one line per loop
+/// constraint between keyframe centres, LINE_LIST; id 1: a ball on each keyframe a loop joins,
+/// SPHERE_LIST); a marker with nothing to show is deleted.
 /// `frustum_size` is the frustum depth in map units.
 visualization_msgs::MarkerArray keyframeMarkers(
     const map::Map& map, const std::vector<std::pair<map::KeyframeId, map::KeyframeId>>& loops,
