@@ -59,8 +59,10 @@ std::vector<std::pair<std::pair<map::KeyframeId, map::KeyframeId>, int>> sharedP
 }  // namespace
 
 void PoseGraphBuilderOptions::validate() const {
-  if (min_shared_points < 0) {
-    throw std::invalid_argument("pose graph builder: min_shared_points must be >= 0");
+  if (min_shared_points < 0 || max_covisibility_edges_per_keyframe < 0) {
+    throw std::invalid_argument(
+        "pose graph builder: min_shared_points and max_covisibility_edges_per_keyframe must be "
+        ">= 0");
   }
   if (!information.allFinite()) {
     throw std::invalid_argument("pose graph builder: information must be finite");
@@ -103,12 +105,24 @@ PoseGraph buildPoseGraph(const map::Map& map, const std::vector<map::KeyframeId>
     }
   }
   if (options.min_shared_points > 0) {
+    // Candidates per newer keyframe: (shared points, older keyframe), strongest first.
+    std::map<map::KeyframeId, std::vector<std::pair<int, map::KeyframeId>>> candidates;
     for (const auto& [pair, count] : sharedPoints(map, selected)) {
-      if (count < options.min_shared_points || consecutive.count(pair)) {
-        continue;
+      if (count >= options.min_shared_points && !consecutive.count(pair)) {
+        candidates[pair.second].emplace_back(count, pair.first);
       }
-      graph.addEdge(
-          relativeEdge(map, pair.second, pair.first, EdgeKind::kCovisibility, options.information));
+    }
+    for (auto& [newer, olders] : candidates) {
+      std::stable_sort(olders.begin(), olders.end(),
+                       [](const auto& a, const auto& b) { return a.first > b.first; });
+      const std::size_t limit =
+          options.max_covisibility_edges_per_keyframe > 0
+              ? static_cast<std::size_t>(options.max_covisibility_edges_per_keyframe)
+              : olders.size();
+      for (std::size_t k = 0; k < std::min(limit, olders.size()); ++k) {
+        graph.addEdge(relativeEdge(map, newer, olders[k].second, EdgeKind::kCovisibility,
+                                   options.information));
+      }
     }
   }
   for (const PoseGraphEdge& edge : loop_edges) {

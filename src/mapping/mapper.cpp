@@ -36,8 +36,9 @@ std::string LoopCorrectionStatistics::describe() const {
 void LoopCorrectionParams::validate() const {
   graph.validate();
   structure.validate();
-  if (covisibility_min_shared_points < 0) {
-    throw std::invalid_argument("loop correction: covisibility_min_shared_points must be >= 0");
+  if (covisibility_min_shared_points < 0 || covisibility_max_edges < 0) {
+    throw std::invalid_argument(
+        "loop correction: covisibility_min_shared_points and covisibility_max_edges must be >= 0");
   }
   if (!(loop_edge_weight > 0.0)) {
     throw std::invalid_argument("loop correction: loop_edge_weight must be > 0");
@@ -58,21 +59,7 @@ Mapper::Mapper(const MapperParams& params, double focal_length_px)
 
 map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics) {
   corrections_.bringUpToDate(message);
-  for (const map::NewMapPoint& point : message.new_points) {
-    if (map_.hasPoint(point.id)) continue;
-    map_.addPoint({point.id, point.p_world, point.reference_keyframe, {}});
-  }
-  map::Keyframe keyframe = message.keyframe;
-  keyframe.observations.clear();
-  for (const map::Observation& observation : message.keyframe.observations) {
-    if (map_.hasPoint(observation.point_id)) keyframe.observations.push_back(observation);
-  }
-  map_.addKeyframe(std::move(keyframe));
-  for (const map::KeyframeObservation& o : message.earlier_observations) {
-    if (map_.hasKeyframe(o.keyframe_id) && map_.hasPoint(o.point_id)) {
-      map_.addObservation(o.keyframe_id, o.point_id, o.xy);
-    }
-  }
+  map::addKeyframeMessage(message, map_);
 
   map::MapUpdate update;
   if (statistics) *statistics = BundleStatistics{};
@@ -119,6 +106,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   // The graph over all keyframes, the oldest fixed (it defines the world frame).
   loop::PoseGraphBuilderOptions builder;
   builder.min_shared_points = p.covisibility_min_shared_points;
+  builder.max_covisibility_edges_per_keyframe = p.covisibility_max_edges;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
   const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges_, {oldest}, builder);
   stats.build_ms = msSince(start);

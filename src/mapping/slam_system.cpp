@@ -34,11 +34,11 @@ SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camer
   if (params_.mapping_thread) {
     mapping_thread_ = std::thread([this] {
       while (std::optional<MapperInput> input = mapper_inbox_.waitPop())
-        handle(std::move(*input));
+        handleSafely(std::move(*input));
     });
     loop_thread_ = std::thread([this] {
       while (std::optional<LoopInput> input = loop_inbox_.waitPop())
-        handle(std::move(*input));
+        handleSafely(std::move(*input));
     });
   }
 }
@@ -98,11 +98,11 @@ void SlamSystem::runInline() {
   while (progress) {
     progress = false;
     while (std::optional<MapperInput> input = mapper_inbox_.tryPop()) {
-      handle(std::move(*input));
+      handleSafely(std::move(*input));
       progress = true;
     }
     while (std::optional<LoopInput> input = loop_inbox_.tryPop()) {
-      handle(std::move(*input));
+      handleSafely(std::move(*input));
       progress = true;
     }
   }
@@ -111,6 +111,16 @@ void SlamSystem::runInline() {
 void SlamSystem::publishUpdate(map::MapUpdate update) {
   loop_inbox_.push(update);
   tracker_inbox_.push(std::move(update));
+}
+
+template <typename Input>
+void SlamSystem::handleSafely(Input input) {
+  // The background threads must outlive any bad input: a refused message is logged and skipped.
+  try {
+    handle(std::move(input));
+  } catch (const std::exception& e) {
+    log(std::string("a message was skipped: ") + e.what());
+  }
 }
 
 void SlamSystem::handle(MapperInput input) {

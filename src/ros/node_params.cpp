@@ -100,7 +100,8 @@ const char* const kPlaceRecognition = "place_recognition";
 /// system, place_recognition).
 std::set<std::string> slamSections() {
   std::set<std::string> sections = {kPlaceRecognition};
-  const YAML::Node defaults = YAML::Load(io::formatSlamParams(mapping::SlamParams{}));
+  const mapping::SlamParams default_params;  // a named object: no maybe-uninitialized warning
+  const YAML::Node defaults = YAML::Load(io::formatSlamParams(default_params));
   for (const auto& entry : defaults)
     sections.insert(entry.first.as<std::string>());
   return sections;

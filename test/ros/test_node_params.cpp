@@ -44,7 +44,8 @@ TEST(NodeParams, DefaultsWithoutParameters) {
   EXPECT_TRUE(tracking.node.map_z_up);
   EXPECT_FALSE(tracking.calibration.has_value());
   EXPECT_TRUE(tracking.unknown.empty());
-  EXPECT_EQ(io::formatSlamParams(tracking.slam), io::formatSlamParams(mapping::SlamParams{}));
+  const mapping::SlamParams defaults;
+  EXPECT_EQ(io::formatSlamParams(tracking.slam), io::formatSlamParams(defaults));
   const MappingNodeConfig mapping = mappingNodeConfig(emptyStruct());
   EXPECT_EQ(mapping.node.map_frame, "map");
   EXPECT_NE(describe(mapping).find("window_ba"), std::string::npos);

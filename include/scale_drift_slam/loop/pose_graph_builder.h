@@ -18,6 +18,9 @@ struct PoseGraphBuilderOptions {
   /// Join non-consecutive keyframes that observe at least this many common points; 0 adds no
   /// co-visibility edges.
   int min_shared_points = 0;
+  /// At most this many co-visibility edges from each keyframe to older ones, the strongest
+  /// (most shared points) first; 0: no limit. Bounds the graph's size and its fill-in.
+  int max_covisibility_edges_per_keyframe = 0;
   /// Information of the edges built here (identity as in the paper's Keble experiment).
   Matrix7d information = Matrix7d::Identity();
 

@@ -25,9 +25,18 @@ namespace scale_drift_slam::mapping {
 /// How a loop constraint corrects the map.
 struct LoopCorrectionParams {
   /// The graph's mode (sim3: the paper; se3: the baseline that cannot correct scale) and solver.
-  loop::PoseGraphOptions graph;
-  /// Co-visibility edges join keyframes sharing at least this many points (0: none).
+  /// LM stops when chi2 changes by less than 1e-6 relatively: centimetre-level agreement with
+  /// the fully converged graph for a fraction of the iterations (doc/loop_closure.md).
+  loop::PoseGraphOptions graph = sixDigits();
+  static loop::PoseGraphOptions sixDigits() {
+    loop::PoseGraphOptions options;
+    options.function_tolerance = 1e-6;
+    return options;
+  }
+  /// Co-visibility edges join keyframes sharing at least this many points (0: none), at most
+  /// `covisibility_max_edges` from each keyframe (the strongest): ORB-SLAM's essential graph.
   int covisibility_min_shared_points = 100;
+  int covisibility_max_edges = 3;
   /// Weight of a loop edge's information relative to an odometry edge's (identity).
   double loop_edge_weight = 1.0;
   StructureOnlyBAOptions structure;

@@ -78,6 +78,8 @@ class SlamSystem {
 
   void drainTrackerInbox();
   void runInline();
+  template <typename Input>
+  void handleSafely(Input input);
   void handle(MapperInput input);
   void handle(LoopInput input);
   void publishUpdate(map::MapUpdate update);
