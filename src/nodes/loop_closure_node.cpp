@@ -59,7 +59,11 @@ class LoopClosureNode {
     worker_ = std::thread([this] {
       while (std::optional<Input> input = inbox_.waitPop()) {
         if (!ros::ok()) break;  // shutting down: the backlog is dropped
-        std::visit([this](auto& in) { handle(in); }, *input);
+        try {  // the worker must outlive any message: a refused one is logged and skipped
+          std::visit([this](auto& in) { handle(in); }, *input);
+        } catch (const std::exception& e) {
+          ROS_ERROR_THROTTLE(5, "a message was skipped: %s", e.what());
+        }
       }
     });
   }

@@ -182,7 +182,7 @@ scale_drift_slam::Sim3Constraint toSim3ConstraintMsg(const loop::LoopConstraint&
   msg.from_keyframe_id = constraint.current_id;
   msg.to_keyframe_id = constraint.loop_id;
   msg.measurement = toSim3Msg(constraint.S_current_loop);
-  for (int i = 0; i < 7; ++i)
+  for (std::size_t i = 0; i < 7; ++i)
     msg.information[8 * i] = 1.0;  // identity, row-major 7x7
   msg.inliers = static_cast<std::uint32_t>(std::max(0, constraint.num_inliers));
   msg.matches = static_cast<std::uint32_t>(std::max(0, constraint.num_matches));
