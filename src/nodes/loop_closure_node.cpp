@@ -77,14 +77,16 @@ class LoopClosureNode {
  private:
   // ---- main thread: convert and queue ----
   void onKeyframe(const scale_drift_slam::KeyframeConstPtr& msg) {
-    KeyframeInput in{msg->session, msg->mapper_id, {}, msg->camera, {}, msg->header.stamp};
+    std::string image_problem;
+    map::KeyframeMessage keyframe;
     try {
-      in.keyframe = ros_conversions::fromKeyframeMsg(*msg, &in.image_problem);
+      keyframe = ros_conversions::fromKeyframeMsg(*msg, &image_problem);
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5, "ignoring keyframe %u: %s", msg->id, e.what());
       return;
     }
-    queue(std::move(in));
+    queue(KeyframeInput{msg->session, msg->mapper_id, std::move(keyframe), msg->camera,
+                        std::move(image_problem), msg->header.stamp});
   }
 
   void onMapUpdate(const scale_drift_slam::MapUpdateConstPtr& msg) {
@@ -96,9 +98,9 @@ class LoopClosureNode {
   }
 
   void onRequest(const scale_drift_slam::RelocalisationRequestConstPtr& msg) {
-    RequestInput in{msg->session, {}, msg->header.stamp};
+    map::RelocalisationRequest request;
     try {
-      in.request = ros_conversions::fromRelocalisationRequestMsg(*msg);
+      request = ros_conversions::fromRelocalisationRequestMsg(*msg);
     } catch (const std::exception& e) {  // answered at once: the tracker may ask again
       ROS_ERROR_THROTTLE(5, "cannot relocalise frame %lu: %s",
                          static_cast<unsigned long>(msg->frame_index), e.what());
@@ -108,7 +110,7 @@ class LoopClosureNode {
       publishAnswer(failed, msg->session, msg->header.stamp);
       return;
     }
-    inbox_.pushUrgent(std::move(in));
+    inbox_.pushUrgent(RequestInput{msg->session, std::move(request), msg->header.stamp});
   }
 
   void queue(Input input) {
