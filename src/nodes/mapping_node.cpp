@@ -163,7 +163,9 @@ class MappingNode {
     }
     try {
       if (path.empty()) throw std::runtime_error("no path given and ~trajectory_file is not set");
-      io::saveTumTrajectory(path, poses, "keyframes after the last window BA, T_world_cam");
+      io::saveTumTrajectory(
+          path, poses,
+          "keyframes as the mapper holds them (window BA, loop corrections), T_world_cam");
       response.success = true;
       response.keyframes = static_cast<std::uint32_t>(poses.size());
       response.message = "wrote " + std::to_string(poses.size()) + " keyframes to " + path;
