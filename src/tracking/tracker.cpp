@@ -127,8 +127,11 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
       track(timestamp, pyramid, &result);
     }
   } catch (const cv::Exception& e) {
-    // An image OpenCV cannot process must not end the run: report it, keep the state.
+    // An image OpenCV cannot process must not end the run: report it, keep the state (and the
+    // loop correction to report, which was taken from pending_loop_correction_ already).
+    const std::optional<geometry::Sim3> loop_correction = result.loop_correction;
     result = FrameResult{};
+    result.loop_correction = loop_correction;
     result.timestamp = timestamp;
     result.rejected = true;
     result.message = std::string("frame rejected: OpenCV failed: ") + e.what();

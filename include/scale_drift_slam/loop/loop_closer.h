@@ -75,6 +75,8 @@ class LoopCloser {
   map::RelocalisationAnswer relocalise(const map::RelocalisationRequest& request);
 
   const map::Map& map() const { return map_; }
+  /// The version of the last MapUpdate applied (0: none).
+  std::uint64_t mapVersion() const { return map_version_; }
   std::size_t numKeyframes() const { return map_.numKeyframes(); }
   const LoopCloserParams& params() const { return params_; }
 
