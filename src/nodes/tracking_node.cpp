@@ -101,6 +101,12 @@ class TrackingNode {
   void resetTracker(const std::string& why) {
     if (!why.empty()) ROS_WARN("resetting the tracker: %s", why.c_str());
     tracker_ = std::make_unique<tracking::Tracker>(camera_, config_.slam.tracker);
+    startSession();
+  }
+
+  /// A new map: its keyframes carry a new session, on which the mapper and the loop closer
+  /// start afresh; what they still send about the old map is dropped.
+  void startSession() {
     session_ = newSession();
     inbox_.reset();
     odom_.reset();
@@ -164,6 +170,10 @@ class TrackingNode {
       ROS_ERROR_THROTTLE(5, "tracking failed on the frame at %.6f s: %s", header.stamp.toSec(),
                          e.what());
       return;
+    }
+    if (result.map_restarted) {
+      ROS_WARN("%s", result.message.c_str());
+      startSession();
     }
     publish(header, result, image);
   }

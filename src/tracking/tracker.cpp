@@ -53,9 +53,11 @@ void TrackerParams::validate() const {
         "tracker.local_recent_keyframes must be >= 1, "
         "local_nearest_keyframes >= 0, local_covisibility_min_shared >= 1");
   }
-  if (max_rejected_frames < 1 || relocalisation_retry_frames < 1) {
+  if (max_rejected_frames < 1 || relocalisation_retry_frames < 1 || restart_after_lost_frames < 1 ||
+      restart_below_keyframes < 0) {
     throw std::invalid_argument(
-        "tracker.max_rejected_frames and relocalisation_retry_frames must be >= 1");
+        "tracker.max_rejected_frames, relocalisation_retry_frames and restart_after_lost_frames "
+        "must be >= 1, restart_below_keyframes >= 0");
   }
   if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
     throw std::invalid_argument(
@@ -108,12 +110,14 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
     grey = toGrey(image, encoding);
   } catch (const std::invalid_argument& e) {
     rejectFrame(e.what(), &result);
+    restartYoungLostMap(&result);
     return result;
   }
   const std::string problem =
       frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {
     rejectFrame(problem, &result);
+    restartYoungLostMap(&result);
     return result;
   }
   rejected_in_row_ = 0;
@@ -139,6 +143,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   if (state_ == TrackingState::kLost && !result.rejected) {
     requestRelocalisation(timestamp, pyramid, &result);
   }
+  restartYoungLostMap(&result);
   if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
   result.state = state_;
   if (result.has_pose) {
@@ -161,6 +166,28 @@ void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
     result->message += "; lost after " + std::to_string(rejected_in_row_) + " unusable frames";
   }
   result->state = state_;
+}
+
+void Tracker::restartYoungLostMap(FrameResult* result) {
+  lost_in_row_ = state_ == TrackingState::kLost ? lost_in_row_ + 1 : 0;
+  const std::size_t keyframes = map_.numKeyframes();
+  if (lost_in_row_ < params_.restart_after_lost_frames ||
+      keyframes >= static_cast<std::size_t>(params_.restart_below_keyframes)) {
+    return;
+  }
+  // A fresh tracker: nothing of the young map may leak into the next one. Only the frame
+  // counter goes on (relocalisation answers are matched by it).
+  const std::uint64_t frame_index = frame_index_;
+  *this = Tracker(camera_, params_);
+  frame_index_ = frame_index;
+  result->map_restarted = true;
+  result->state = state_;
+  result->has_pose = false;
+  result->relocalisation_request.reset();
+  result->message += (result->message.empty() ? "" : "; ") + std::string("lost for ") +
+                     std::to_string(params_.restart_after_lost_frames) + " frames with a map of " +
+                     std::to_string(keyframes) +
+                     " keyframes (too young to relocalise in): discarded, initialising again";
 }
 
 void Tracker::requestRelocalisation(double timestamp, const ImagePyramid& image,
@@ -267,6 +294,7 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   }
   map_.addKeyframe(std::move(first_kf));
   map_.addKeyframe(std::move(second_kf));
+  tracked_at_keyframe_ = static_cast<int>(previous_measurements_.size());
   state_ = TrackingState::kGood;
   T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
   previous_image_ = image;
