@@ -74,21 +74,7 @@ LoopCloser::LoopCloser(std::shared_ptr<const geometry::CameraModel> camera, Loop
 }
 
 void LoopCloser::storeKeyframe(const map::KeyframeMessage& message) {
-  for (const map::NewMapPoint& point : message.new_points) {
-    if (!map_.hasPoint(point.id))
-      map_.addPoint({point.id, point.p_world, point.reference_keyframe, {}});
-  }
-  map::Keyframe keyframe = message.keyframe;
-  keyframe.observations.clear();
-  for (const map::Observation& observation : message.keyframe.observations) {
-    if (map_.hasPoint(observation.point_id)) keyframe.observations.push_back(observation);
-  }
-  map_.addKeyframe(std::move(keyframe));
-  for (const map::KeyframeObservation& o : message.earlier_observations) {
-    if (map_.hasKeyframe(o.keyframe_id) && map_.hasPoint(o.point_id)) {
-      map_.addObservation(o.keyframe_id, o.point_id, o.xy);
-    }
-  }
+  map::addKeyframeMessage(message, map_);
   if (!message.image.empty()) {
     std::vector<std::uint8_t>& jpeg = jpeg_images_[message.keyframe.id];
     cv::imencode(".jpg", message.image, jpeg,

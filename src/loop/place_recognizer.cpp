@@ -186,13 +186,21 @@ std::vector<LoopCandidate> PlaceRecognizer::findPlaces(const KeyframeAppearance&
   std::vector<float> scores;
   database_.scoreAll(bow, scores);
   // A frame has no previous keyframe to normalise by: scores are taken relative to the best.
+  // The best keyframes are checked one by one, not one per island: a lost camera is usually
+  // nearest to one end of the island of its last keyframes, not to its best-scoring member.
   const double best = *std::max_element(scores.begin(), scores.end());
   if (!(best > 0.0)) return {};
-  PlaceQueryResult counters;
-  std::vector<Island> islands = findIslands(scores, best, scores.size(),
-                                            std::numeric_limits<double>::infinity(), {}, counters);
-  if (islands.size() > static_cast<std::size_t>(max_candidates)) {
-    islands.resize(static_cast<std::size_t>(max_candidates));
+  std::vector<std::size_t> order(scores.size());
+  for (std::size_t i = 0; i < order.size(); ++i)
+    order[i] = i;
+  const std::size_t n = std::min<std::size_t>(max_candidates, order.size());
+  std::partial_sort(order.begin(), order.begin() + n, order.end(),
+                    [&](std::size_t a, std::size_t b) { return scores[a] > scores[b]; });
+  std::vector<Island> islands;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = order[k];
+    if (scores[i] < params_.min_normalized_score * best) break;
+    islands.push_back(Island{i, i, i, scores[i], scores[i]});
   }
   std::vector<LoopCandidate> candidates;
   for (const Island& island : islands) {

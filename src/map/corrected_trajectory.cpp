@@ -11,6 +11,12 @@ void CorrectedTrajectory::add(double timestamp, const geometry::SE3& T_cam_world
   frames_.push_back({timestamp, T_cam_world, reference_keyframe});
 }
 
+void CorrectedTrajectory::keepNewest(std::size_t count) {
+  if (frames_.size() > count) {
+    frames_.erase(frames_.begin(), frames_.end() - static_cast<std::ptrdiff_t>(count));
+  }
+}
+
 void CorrectedTrajectory::apply(const MapUpdate& update) {
   if (!update.S_new_old) return;
   std::unordered_map<KeyframeId, const geometry::Sim3*> corrections;

@@ -6,6 +6,24 @@ geometry::SE3 correctPose(const geometry::SE3& T_cam_world, const geometry::Sim3
   return (geometry::Sim3(T_cam_world) * S_new_old.inverse()).toSE3();
 }
 
+void addKeyframeMessage(const KeyframeMessage& message, Map& map) {
+  for (const NewMapPoint& point : message.new_points) {
+    if (!map.hasPoint(point.id))
+      map.addPoint({point.id, point.p_world, point.reference_keyframe, {}});
+  }
+  Keyframe keyframe = message.keyframe;
+  keyframe.observations.clear();
+  for (const Observation& observation : message.keyframe.observations) {
+    if (map.hasPoint(observation.point_id)) keyframe.observations.push_back(observation);
+  }
+  map.addKeyframe(std::move(keyframe));
+  for (const KeyframeObservation& o : message.earlier_observations) {
+    if (map.hasKeyframe(o.keyframe_id) && map.hasPoint(o.point_id)) {
+      map.addObservation(o.keyframe_id, o.point_id, o.xy);
+    }
+  }
+}
+
 bool applyMapUpdate(const MapUpdate& update, Map& map, std::uint64_t* applied_version) {
   if (applied_version) {
     if (update.map_version < *applied_version) return false;

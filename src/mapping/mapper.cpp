@@ -59,21 +59,7 @@ Mapper::Mapper(const MapperParams& params, double focal_length_px)
 
 map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics) {
   corrections_.bringUpToDate(message);
-  for (const map::NewMapPoint& point : message.new_points) {
-    if (map_.hasPoint(point.id)) continue;
-    map_.addPoint({point.id, point.p_world, point.reference_keyframe, {}});
-  }
-  map::Keyframe keyframe = message.keyframe;
-  keyframe.observations.clear();
-  for (const map::Observation& observation : message.keyframe.observations) {
-    if (map_.hasPoint(observation.point_id)) keyframe.observations.push_back(observation);
-  }
-  map_.addKeyframe(std::move(keyframe));
-  for (const map::KeyframeObservation& o : message.earlier_observations) {
-    if (map_.hasKeyframe(o.keyframe_id) && map_.hasPoint(o.point_id)) {
-      map_.addObservation(o.keyframe_id, o.point_id, o.xy);
-    }
-  }
+  map::addKeyframeMessage(message, map_);
 
   map::MapUpdate update;
   if (statistics) *statistics = BundleStatistics{};

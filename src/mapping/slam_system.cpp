@@ -28,17 +28,18 @@ double msSince(std::chrono::steady_clock::time_point start) {
 SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camera,
                        const SlamParams& params)
     : params_(params),
+      camera_(camera),
       tracker_(camera, params.tracker),
       mapper_(params.mapper, focalOf(camera)),
       loop_closer_(camera, params.loop) {
   if (params_.mapping_thread) {
     mapping_thread_ = std::thread([this] {
       while (std::optional<MapperInput> input = mapper_inbox_.waitPop())
-        handle(std::move(*input));
+        handleSafely(std::move(*input));
     });
     loop_thread_ = std::thread([this] {
       while (std::optional<LoopInput> input = loop_inbox_.waitPop())
-        handle(std::move(*input));
+        handleSafely(std::move(*input));
     });
   }
 }
@@ -66,6 +67,15 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
                                                tracking::PixelEncoding encoding) {
   drainTrackerInbox();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
+  if (result.map_restarted) {
+    ++tracker_generation_;
+    ++map_restarts_;
+    trajectory_ = map::CorrectedTrajectory();  // its frames are in the discarded map's frame
+    if (!finished_) {
+      mapper_inbox_.push(MapRestart{});
+      loop_inbox_.push(MapRestart{});
+    }
+  }
   if (result.has_pose) trajectory_.add(timestamp, result.T_cam_world, result.reference_keyframe);
   if (!finished_) {
     for (const map::KeyframeMessage& message : result.keyframes) {
@@ -84,11 +94,12 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
 
 void SlamSystem::drainTrackerInbox() {
   while (std::optional<TrackerInput> input = tracker_inbox_.tryPop()) {
-    if (const auto* update = std::get_if<map::MapUpdate>(&*input)) {
+    if (input->generation != tracker_generation_) continue;  // about a discarded map
+    if (const auto* update = std::get_if<map::MapUpdate>(&input->message)) {
       tracker_.applyMapUpdate(*update);
       trajectory_.apply(*update);
     } else {
-      tracker_.applyRelocalisation(std::get<map::RelocalisationAnswer>(*input));
+      tracker_.applyRelocalisation(std::get<map::RelocalisationAnswer>(input->message));
     }
   }
 }
@@ -98,19 +109,29 @@ void SlamSystem::runInline() {
   while (progress) {
     progress = false;
     while (std::optional<MapperInput> input = mapper_inbox_.tryPop()) {
-      handle(std::move(*input));
+      handleSafely(std::move(*input));
       progress = true;
     }
     while (std::optional<LoopInput> input = loop_inbox_.tryPop()) {
-      handle(std::move(*input));
+      handleSafely(std::move(*input));
       progress = true;
     }
   }
 }
 
 void SlamSystem::publishUpdate(map::MapUpdate update) {
-  loop_inbox_.push(update);
-  tracker_inbox_.push(std::move(update));
+  loop_inbox_.push(OfGeneration<map::MapUpdate>{mapper_generation_, update});
+  tracker_inbox_.push(TrackerInput{mapper_generation_, std::move(update)});
+}
+
+template <typename Input>
+void SlamSystem::handleSafely(Input input) {
+  // The background threads must outlive any bad input: a refused message is logged and skipped.
+  try {
+    handle(std::move(input));
+  } catch (const std::exception& e) {
+    log(std::string("a message was skipped: ") + e.what());
+  }
 }
 
 void SlamSystem::handle(MapperInput input) {
@@ -124,7 +145,14 @@ void SlamSystem::handle(MapperInput input) {
     publishUpdate(std::move(update));
     return;
   }
-  const loop::LoopConstraint& constraint = std::get<loop::LoopConstraint>(input);
+  if (std::holds_alternative<MapRestart>(input)) {
+    ++mapper_generation_;
+    mapper_ = Mapper(params_.mapper, focalOf(camera_));
+    log("map restarted: the tracker discarded a young map it was lost in");
+    return;
+  }
+  const auto& [generation, constraint] = std::get<OfGeneration<loop::LoopConstraint>>(input);
+  if (generation != mapper_generation_) return;  // found in a discarded map
   LoopCorrectionStatistics c;
   map::MapUpdate update = mapper_.closeLoop(constraint, &c);
   log(c.describe());
@@ -147,9 +175,15 @@ void SlamSystem::handle(LoopInput input) {
     if (detection.verification || !detection.recognition.candidates.empty()) {
       log(detection.describe());
     }
-    if (detection.constraint) mapper_inbox_.push(*detection.constraint);
-  } else if (auto* update = std::get_if<map::MapUpdate>(&input)) {
-    loop_closer_.applyMapUpdate(*update);
+    if (detection.constraint) {
+      mapper_inbox_.push(
+          OfGeneration<loop::LoopConstraint>{loop_generation_, *detection.constraint});
+    }
+  } else if (auto* update = std::get_if<OfGeneration<map::MapUpdate>>(&input)) {
+    if (update->generation == loop_generation_) loop_closer_.applyMapUpdate(update->message);
+  } else if (std::holds_alternative<MapRestart>(input)) {
+    ++loop_generation_;
+    loop_closer_ = loop::LoopCloser(camera_, params_.loop);
   } else {
     const map::RelocalisationAnswer answer =
         loop_closer_.relocalise(std::get<map::RelocalisationRequest>(input));
@@ -162,7 +196,7 @@ void SlamSystem::handle(LoopInput input) {
         (answer.success ? "against keyframe " + std::to_string(answer.keyframe_id) + ", " +
                               std::to_string(answer.inliers) + " inliers"
                         : "failed: " + answer.reason));
-    tracker_inbox_.push(answer);
+    tracker_inbox_.push(TrackerInput{loop_generation_, answer});
   }
 }
 

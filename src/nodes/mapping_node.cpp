@@ -1,10 +1,12 @@
 // mapping_node: the back-end as a ROS node (doc/ros.md). Owns the global map through the core's
 // mapping::Mapper: each Keyframe from the tracking node is added and the sliding-window BA runs;
-// the correction goes back as a MapUpdate. Publishes the map as a latched PointCloud2 and the
-// keyframes (and, with loop closure, loop edges) as markers. A keyframe of a new tracker session
-// (the tracker was reset or restarted) starts a new map. Services: ~save_trajectory (TUM file of
-// the keyframes), ~reset (a new, empty map). Everything runs on the main thread, one keyframe at
-// a time, so the map needs no lock.
+// each Sim3Constraint from the loop-closure node closes a loop (Sim(3) pose graph, point
+// correction, structure-only BA). Every correction goes out as a MapUpdate (to the tracking and
+// loop-closure nodes). Publishes the map as a latched PointCloud2 and the keyframes and loop edges
+// as markers. A keyframe of a new tracker session (the tracker was reset or restarted) starts a
+// new map; constraints of another session are refused. Services: ~save_trajectory (TUM file of
+// the keyframes), ~reset (a new, empty map). Everything runs on the main thread, one message at a
+// time, so the map needs no lock.
 
 #include <random>
 
@@ -32,6 +34,7 @@ class MappingNode {
         T_map_world_(ros_frames::mapFromWorld(params_.map_z_up)) {
     keyframe_sub_ =
         nh.subscribe("keyframes", params_.keyframe_queue_size, &MappingNode::onKeyframe, this);
+    constraint_sub_ = nh.subscribe("loop_constraints", 10, &MappingNode::onLoopConstraint, this);
     update_pub_ = nh.advertise<scale_drift_slam::MapUpdate>("map_updates", 20);
     cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("map_cloud", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
@@ -73,18 +76,14 @@ class MappingNode {
         ROS_WARN_THROTTLE(5, "keyframe %u is already in the map: ignored", msg->id);
         return;
       }
-      const map::KeyframeMessage keyframe = ros_conversions::fromKeyframeMsg(*msg);
+      std::string image_problem;  // the mapper needs no image: a bad one is not its business
+      const map::KeyframeMessage keyframe = ros_conversions::fromKeyframeMsg(*msg, &image_problem);
       mapping::BundleStatistics statistics;
       const ros::WallTime start = ros::WallTime::now();
       const map::MapUpdate update = mapper_->addKeyframe(keyframe, &statistics);
       const double ms = (ros::WallTime::now() - start).toSec() * 1e3;
-      scale_drift_slam::MapUpdate out = ros_conversions::toMapUpdateMsg(update);
-      out.header.stamp = msg->header.stamp;
-      out.session = session_;
-      out.mapper_id = mapper_id_;
-      update_pub_.publish(out);
       last_stamp_ = msg->header.stamp;
-      publishMap();
+      publishUpdate(update);
       ROS_DEBUG("keyframe %u: window BA %.1f ms", msg->id, ms);
       if (mapper_->map().numKeyframes() % 20 == 0) {
         ROS_INFO("map: %zu keyframes, %zu points (keyframe %u, window BA %.1f ms)",
@@ -95,13 +94,63 @@ class MappingNode {
     }
   }
 
+  void onLoopConstraint(const scale_drift_slam::Sim3ConstraintConstPtr& msg) {
+    const std::string loop = "loop " + std::to_string(msg->from_keyframe_id) + " -> " +
+                             std::to_string(msg->to_keyframe_id);
+    if (!mapper_ || msg->session != session_) {
+      ROS_WARN_THROTTLE(5, "%s refused: it is of tracker session %u, %s", loop.c_str(),
+                        msg->session,
+                        mapper_ ? ("the map is of session " + std::to_string(session_)).c_str()
+                                : "there is no map yet");
+      return;
+    }
+    loop::LoopConstraint constraint;
+    try {
+      constraint = ros_conversions::fromSim3ConstraintMsg(*msg);
+    } catch (const std::exception& e) {
+      ROS_WARN_THROTTLE(5, "%s refused: %s", loop.c_str(), e.what());
+      return;
+    }
+    mapping::LoopCorrectionStatistics statistics;
+    try {
+      const map::MapUpdate update = mapper_->closeLoop(constraint, &statistics);
+      if (!statistics.applied) {
+        const map::Map& map = mapper_->map();
+        const map::KeyframeId missing =
+            map.hasKeyframe(constraint.loop_id) ? constraint.current_id : constraint.loop_id;
+        const bool older = map.numKeyframes() > 0 && missing < map.keyframes().begin()->first;
+        ROS_WARN("%s%s", statistics.describe().c_str(),
+                 older ? " (made before this map started: the mapper restarted or was reset)" : "");
+        return;
+      }
+      ROS_INFO("%s (scale %.4f, %d inliers)", statistics.describe().c_str(), constraint.scale,
+               constraint.num_inliers);
+      last_stamp_ = std::max(last_stamp_, msg->header.stamp);
+      publishUpdate(update);
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5, "%s not applied: %s", loop.c_str(), e.what());
+    }
+  }
+
+  void publishUpdate(const map::MapUpdate& update) {
+    scale_drift_slam::MapUpdate out = ros_conversions::toMapUpdateMsg(update);
+    out.header.stamp = last_stamp_;
+    out.session = session_;
+    out.mapper_id = mapper_id_;
+    update_pub_.publish(out);
+    publishMap();
+  }
+
   void publishMap() {
     std_msgs::Header header;
     header.stamp = last_stamp_;
     header.frame_id = params_.map_frame;
     cloud_pub_.publish(ros_visualization::mapCloud(mapper_->map(), T_map_world_, header));
-    marker_pub_.publish(ros_visualization::keyframeMarkers(
-        mapper_->map(), loop_edges_, T_map_world_, header, params_.marker_scale));
+    std::vector<std::pair<map::KeyframeId, map::KeyframeId>> loops;
+    for (const loop::PoseGraphEdge& edge : mapper_->loopEdges())
+      loops.emplace_back(edge.from, edge.to);
+    marker_pub_.publish(ros_visualization::keyframeMarkers(mapper_->map(), loops, T_map_world_,
+                                                           header, params_.marker_scale));
   }
 
   bool onSaveTrajectory(scale_drift_slam::SaveTrajectory::Request& request,
@@ -114,7 +163,9 @@ class MappingNode {
     }
     try {
       if (path.empty()) throw std::runtime_error("no path given and ~trajectory_file is not set");
-      io::saveTumTrajectory(path, poses, "keyframes after the last window BA, T_world_cam");
+      io::saveTumTrajectory(
+          path, poses,
+          "keyframes as the mapper holds them (window BA, loop corrections), T_world_cam");
       response.success = true;
       response.keyframes = static_cast<std::uint32_t>(poses.size());
       response.message = "wrote " + std::to_string(poses.size()) + " keyframes to " + path;
@@ -137,7 +188,7 @@ class MappingNode {
   ros_params::MappingNodeConfig config_;
   const ros_params::MappingNodeParams& params_;
   geometry::SE3 T_map_world_;
-  ros::Subscriber keyframe_sub_;
+  ros::Subscriber keyframe_sub_, constraint_sub_;
   ros::Publisher update_pub_, cloud_pub_, marker_pub_;
   ros::ServiceServer save_srv_, reset_srv_;
 
@@ -146,8 +197,6 @@ class MappingNode {
   bool has_session_ = false;
   std::uint32_t session_ = 0;
   ros::Time last_stamp_;
-  /// Loop constraints (from, to) for the markers; filled by loop closure (phase 2).
-  std::vector<std::pair<map::KeyframeId, map::KeyframeId>> loop_edges_;
 };
 
 }  // namespace

@@ -1,10 +1,12 @@
 // tracking_node: the front-end as a ROS node (doc/ros.md). Camera images (image_transport raw,
 // or compressed) and a calibration (CameraInfo or ~calibration_file) go into the core's
 // tracking::Tracker; out come the pose on tf (map -> odom -> camera body, static body ->
-// optical), nav_msgs/Odometry and Path, TrackingStatus, a debug image and every new Keyframe.
-// MapUpdates arrive on their own callback queue and thread and wait in a map::MessageQueue that
-// the image callback drains before each frame, as mapping::SlamSystem does offline: the camera
-// never waits for the mapper. Images and services run on the main thread.
+// optical), nav_msgs/Odometry and Path (corrected by loop closures), TrackingStatus, a debug
+// image, every new Keyframe and, when lost, RelocalisationRequests. MapUpdates (mapping node) and
+// RelocalisationAnswers (loop-closure node) arrive on their own callback queue and thread and wait
+// in a map::MessageQueue that the image callback drains before each frame, as
+// mapping::SlamSystem does offline: the camera never waits for the other nodes. Images and
+// services run on the main thread.
 
 #include <random>
 
@@ -18,25 +20,17 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <opencv2/core.hpp>
 
-#include "scale_drift_slam/map/message_queue.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/frames.h"
 #include "scale_drift_slam/ros/image_conversions.h"
-#include "scale_drift_slam/ros/map_versions.h"
 #include "scale_drift_slam/ros/node_params.h"
 #include "scale_drift_slam/ros/slam_messages.h"
+#include "scale_drift_slam/ros/tracker_inbox.h"
 #include "scale_drift_slam/ros/visualization.h"
 
 namespace {
 
 using namespace scale_drift_slam;
-
-/// A map update as it left the subscriber thread: converted, not yet checked against the session.
-struct ReceivedUpdate {
-  std::uint32_t session = 0;
-  std::uint32_t mapper_id = 0;
-  map::MapUpdate update;
-};
 
 class TrackingNode {
  public:
@@ -48,10 +42,20 @@ class TrackingNode {
     info_sub_ = nh.subscribe("camera_info", 5, &TrackingNode::onCameraInfo, this);
     ros::SubscribeOptions options = ros::SubscribeOptions::create<scale_drift_slam::MapUpdate>(
         "map_updates", 20,
-        [this](const scale_drift_slam::MapUpdateConstPtr& msg) { onMapUpdate(msg); },
+        [this](const scale_drift_slam::MapUpdateConstPtr& msg) { receive(*msg, "map update"); },
         ros::VoidPtr(), &update_queue_);
     update_sub_ = nh.subscribe(options);
+    ros::SubscribeOptions answers =
+        ros::SubscribeOptions::create<scale_drift_slam::RelocalisationAnswer>(
+            "relocalisation_answers", 5,
+            [this](const scale_drift_slam::RelocalisationAnswerConstPtr& msg) {
+              receive(*msg, "relocalisation answer");
+            },
+            ros::VoidPtr(), &update_queue_);
+    answer_sub_ = nh.subscribe(answers);
     keyframe_pub_ = nh.advertise<scale_drift_slam::Keyframe>("keyframes", 20);
+    request_pub_ =
+        nh.advertise<scale_drift_slam::RelocalisationRequest>("relocalisation_requests", 2);
     status_pub_ = nh.advertise<scale_drift_slam::TrackingStatus>("tracking_status", 10);
     odometry_pub_ = nh.advertise<nav_msgs::Odometry>("odometry", 10);
     path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
@@ -62,7 +66,6 @@ class TrackingNode {
           ros_conversions::toTransformStampedMsg(ros_frames::bodyFromOptical(), ros::Time(0),
                                                  params_.frames.camera, params_.frames.optical));
     }
-    path_.header.frame_id = params_.frames.map;
     update_spinner_.start();
   }
   ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
@@ -98,12 +101,16 @@ class TrackingNode {
   void resetTracker(const std::string& why) {
     if (!why.empty()) ROS_WARN("resetting the tracker: %s", why.c_str());
     tracker_ = std::make_unique<tracking::Tracker>(camera_, config_.slam.tracker);
+    startSession();
+  }
+
+  /// A new map: its keyframes carry a new session, on which the mapper and the loop closer
+  /// start afresh; what they still send about the old map is dropped.
+  void startSession() {
     session_ = newSession();
-    versions_.reset();
+    inbox_.reset();
     odom_.reset();
-    path_.poses.clear();
-    while (updates_.tryPop()) {
-    }
+    path_.clear();
     last_state_.reset();
   }
 
@@ -155,7 +162,7 @@ class TrackingNode {
       return;
     }
     last_stamp_ = header.stamp;
-    applyMapUpdates();
+    applyReceived();
     tracking::FrameResult result;
     try {
       result = tracker_->processFrame(header.stamp.toSec(), image.image, image.encoding);
@@ -164,48 +171,61 @@ class TrackingNode {
                          e.what());
       return;
     }
+    if (result.map_restarted) {
+      ROS_WARN("%s", result.message.c_str());
+      startSession();
+    }
     publish(header, result, image);
   }
 
   /// Called on the update thread: convert and queue, never touch the tracker.
-  void onMapUpdate(const scale_drift_slam::MapUpdateConstPtr& msg) {
+  template <typename Message>
+  void receive(const Message& msg, const char* what) {
     try {
-      updates_.push({msg->session, msg->mapper_id, ros_conversions::fromMapUpdateMsg(*msg)});
+      inbox_.push(msg);
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "ignoring a map update: %s", e.what());
+      ROS_ERROR_THROTTLE(5, "ignoring a %s: %s", what, e.what());
     }
   }
 
-  void applyMapUpdates() {
-    while (std::optional<ReceivedUpdate> received = updates_.tryPop()) {
-      if (received->session != session_) continue;  // built from a previous tracker's keyframes
-      bool new_mapper = false;
-      const std::uint64_t tracker_version = tracker_->trackingMap().version();
-      const std::optional<std::uint64_t> version = versions_.toTracker(
-          received->mapper_id, received->update.map_version, tracker_version, &new_mapper);
-      if (new_mapper && tracker_version > 0) {
-        ROS_WARN(
-            "map updates from a new mapper (restarted or reset): keeping the tracker's map, "
-            "continuing with the new mapper's versions");
-      }
-      if (!version || *version < tracker_version) continue;  // stale
-      received->update.map_version = *version;
-      if (received->update.S_new_old) odom_.applyCorrection(*received->update.S_new_old);
-      tracker_->applyMapUpdate(received->update);
+  /// Before each frame: the map updates and relocalisation answers that arrived since.
+  void applyReceived() {
+    const ros_conversions::TrackerInbox::Report report =
+        inbox_.drain(session_, *tracker_, path_.trajectory());
+    if (report.new_mapper) {
+      ROS_WARN(
+          "map updates from a new mapper (restarted or reset): keeping the tracker's map, "
+          "continuing with the new mapper's versions");
+    }
+    if (report.relocalised) {
+      ROS_INFO("relocalised against keyframe %u (%d inliers): tracking resumes",
+               report.relocalised->keyframe_id, report.relocalised->inliers);
+    } else if (!report.relocalisation_failure.empty()) {
+      ROS_INFO_THROTTLE(5, "no relocalisation yet: %s", report.relocalisation_failure.c_str());
     }
   }
 
   void publish(const std_msgs::Header& header, const tracking::FrameResult& result,
                const ros_conversions::CameraImage& image) {
     logState(result);
+    if (result.loop_correction) {  // the world moved: C (map -> odom) and the whole path follow
+      odom_.applyCorrection(*result.loop_correction);
+      path_.rebuild();
+      path_pub_.publish(path_.message(header.stamp));
+      frames_since_path_ = 0;
+      ROS_INFO("loop correction applied (scale %.4f): map -> odom and the path moved",
+               odom_.correction().scale());
+    }
     for (const map::KeyframeMessage& keyframe : result.keyframes) {
       scale_drift_slam::Keyframe msg = ros_conversions::toKeyframeMsg(keyframe);
       msg.session = session_;
-      msg.map_version = versions_.toMapper(keyframe.map_version);
+      msg.mapper_id = inbox_.mapperId();
+      msg.map_version = inbox_.toMapper(keyframe.map_version);
       msg.camera = camera_info_;
       msg.camera.header.stamp = msg.header.stamp;
       keyframe_pub_.publish(msg);
     }
+    if (result.relocalisation_request) publishRequest(*result.relocalisation_request);
     scale_drift_slam::TrackingStatus status = ros_conversions::toTrackingStatusMsg(result);
     status.header.stamp = header.stamp;
     status.header.frame_id = params_.frames.optical;
@@ -213,9 +233,12 @@ class TrackingNode {
     status.keyframes = static_cast<std::uint32_t>(tracker_->trackingMap().numKeyframes());
     status.map_points = static_cast<std::uint32_t>(tracker_->trackingMap().numPoints());
     status.candidates = static_cast<std::uint32_t>(tracker_->numCandidates());
-    status.map_version = versions_.toMapper(tracker_->trackingMap().version());
+    status.map_version = inbox_.toMapper(tracker_->trackingMap().version());
     status_pub_.publish(status);
-    if (result.has_pose) publishPose(header.stamp, result.T_cam_world);
+    if (result.has_pose) {
+      path_.add(header.stamp.toSec(), result.T_cam_world, result.reference_keyframe);
+      publishPose(header.stamp, result.T_cam_world);
+    }
     if (debug_pub_.getNumSubscribers() > 0 && !result.rejected) {
       std_msgs::Header debug_header = header;
       debug_header.frame_id = params_.frames.optical;
@@ -237,19 +260,21 @@ class TrackingNode {
     odometry.child_frame_id = f.camera;
     odometry.pose.pose = ros_conversions::toPoseMsg(t.T_odom_body);
     odometry_pub_.publish(odometry);
-    geometry_msgs::PoseStamped pose;
-    pose.header.stamp = stamp;
-    pose.header.frame_id = f.map;
-    pose.pose = ros_conversions::toPoseMsg(t.T_map_body);
-    path_.poses.push_back(pose);
-    if (static_cast<int>(path_.poses.size()) > params_.path_max_poses) {
-      path_.poses.erase(path_.poses.begin());
-    }
     if (++frames_since_path_ >= params_.path_publish_every) {
       frames_since_path_ = 0;
-      path_.header.stamp = stamp;
-      path_pub_.publish(path_);
+      path_pub_.publish(path_.message(stamp));
     }
+  }
+
+  void publishRequest(const map::RelocalisationRequest& request) {
+    scale_drift_slam::RelocalisationRequest msg =
+        ros_conversions::toRelocalisationRequestMsg(request);
+    msg.session = session_;
+    msg.mapper_id = inbox_.mapperId();
+    msg.map_version = inbox_.toMapper(request.map_version);
+    request_pub_.publish(msg);
+    ROS_INFO_THROTTLE(5, "lost: relocalisation of frame %lu requested",
+                      static_cast<unsigned long>(request.frame_index));
   }
 
   /// Logs state changes and rejected frames (throttled), not every frame.
@@ -282,8 +307,8 @@ class TrackingNode {
   image_transport::ImageTransport it_;
   image_transport::Subscriber image_sub_;
   image_transport::Publisher debug_pub_;
-  ros::Subscriber compressed_sub_, info_sub_, update_sub_;
-  ros::Publisher keyframe_pub_, status_pub_, odometry_pub_, path_pub_;
+  ros::Subscriber compressed_sub_, info_sub_, update_sub_, answer_sub_;
+  ros::Publisher keyframe_pub_, request_pub_, status_pub_, odometry_pub_, path_pub_;
   ros::ServiceServer reset_srv_;
   std::string image_topic_;
   tf2_ros::TransformBroadcaster broadcaster_;
@@ -294,14 +319,14 @@ class TrackingNode {
   sensor_msgs::CameraInfo camera_info_;
   std::unique_ptr<tracking::Tracker> tracker_;
   std::uint32_t session_ = 0;
-  map::MessageQueue<ReceivedUpdate> updates_;
-  ros_conversions::MapVersionTranslator versions_;
+  ros_conversions::TrackerInbox inbox_;  ///< Map updates and relocalisation answers.
   ros_frames::OdomFrame odom_;
   ros::Time last_stamp_;
   std::optional<tracking::TrackingState> last_state_;
-  nav_msgs::Path path_;
+  ros_visualization::CameraPath path_{odom_.mapFromWorld(), params_.frames.map,
+                                      static_cast<std::size_t>(params_.path_max_poses)};
   int frames_since_path_ = 0;
-  ros::AsyncSpinner update_spinner_{1, &update_queue_};  // the map-update thread
+  ros::AsyncSpinner update_spinner_{1, &update_queue_};  // map updates and answers
 };
 
 }  // namespace

@@ -112,6 +112,13 @@ geometry::Sim3 fromSim3Msg(const scale_drift_slam::Sim3& msg) {
     throw std::invalid_argument("Sim3 message has a non-positive or non-finite scale (" +
                                 std::to_string(msg.scale) + ")");
   }
+  const geometry_msgs::Quaternion& q = msg.rotation;
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (!std::isfinite(norm) || norm < 1e-6 || !std::isfinite(msg.translation.x) ||
+      !std::isfinite(msg.translation.y) || !std::isfinite(msg.translation.z)) {
+    throw std::invalid_argument(
+        "Sim3 message has a non-finite translation or a non-finite or zero quaternion");
+  }
   return geometry::Sim3::fromScale(
       fromQuaternionMsg(msg.rotation),
       Eigen::Vector3d(msg.translation.x, msg.translation.y, msg.translation.z), msg.scale);

@@ -92,10 +92,15 @@ class Reader {
   std::set<std::string> known_;
 };
 
-/// The sections of the SLAM parameter file (tracker, features, ..., window_ba, mapper, system).
+/// The section of the SLAM parameter file with place recognition's own nested layout
+/// (config/place_recognition.yaml): not printed by formatSlamParams.
+const char* const kPlaceRecognition = "place_recognition";
+
+/// The sections of the SLAM parameter file (tracker, features, ..., window_ba, mapper, loop_*,
+/// system, place_recognition).
 std::set<std::string> slamSections() {
-  std::set<std::string> sections;
-  const mapping::SlamParams default_params;
+  std::set<std::string> sections = {kPlaceRecognition};
+  const mapping::SlamParams default_params;  // a named object: no maybe-uninitialized warning
   const YAML::Node defaults = YAML::Load(io::formatSlamParams(default_params));
   for (const auto& entry : defaults)
     sections.insert(entry.first.as<std::string>());
@@ -118,6 +123,25 @@ std::string yamlScalar(const std::string& key, XmlRpcValue& v) {
     default:
       fail(key, "must be a single value, got " + kindName(v.getType()));
   }
+}
+
+/// Writes the overrides of namespace `values` (~`path`) into `node`; namespaces inside it are
+/// followed only where the file's layout nests (place_recognition), single values elsewhere.
+bool mergeOverrides(const std::string& path, XmlRpcValue& values, YAML::Node node, bool nested) {
+  bool overridden = false;
+  for (auto it = values.begin(); it != values.end(); ++it) {
+    const std::string key = path + "/" + it->first;
+    if (nested && it->second.getType() == XmlRpcValue::TypeStruct) {
+      YAML::Node child = node[it->first];
+      if (!child.IsMap()) child = YAML::Node(YAML::NodeType::Map);
+      mergeOverrides(key, it->second, child, true);
+      node[it->first] = child;
+    } else {
+      node[it->first] = yamlScalar(key, it->second);
+    }
+    overridden = true;
+  }
+  return overridden;
 }
 
 std::string readFile(const std::string& key, const std::string& path) {
@@ -165,6 +189,10 @@ void MappingNodeParams::validate() const {
   check(std::isfinite(marker_scale) && marker_scale > 0.0, "marker_scale", "must be > 0");
 }
 
+void LoopClosureNodeParams::validate() const {
+  check(keyframe_queue_size >= 1, "keyframe_queue_size", "must be >= 1");
+}
+
 mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params) {
   XmlRpcValue params = private_params;
   std::string config_file;
@@ -186,10 +214,10 @@ mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params) {
       fail(section,
            "must be a namespace of " + section + " parameters, got " + kindName(values.getType()));
     }
-    for (auto it = values.begin(); it != values.end(); ++it) {
-      merged[section][it->first] = yamlScalar(section + "/" + it->first, it->second);
-      overridden = true;
-    }
+    YAML::Node target = merged[section];
+    if (!target.IsMap()) target = YAML::Node(YAML::NodeType::Map);
+    overridden |= mergeOverrides(section, values, target, section == kPlaceRecognition);
+    merged[section] = target;
   }
   try {
     return io::parseSlamParams(YAML::Dump(merged),
@@ -241,6 +269,18 @@ MappingNodeConfig mappingNodeConfig(const XmlRpc::XmlRpcValue& private_params) {
   return config;
 }
 
+LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_params) {
+  LoopClosureNodeConfig config;
+  Reader reader(private_params);
+  LoopClosureNodeParams& p = config.node;
+  reader.read("config", &p.config_file);
+  reader.read("keyframe_queue_size", &p.keyframe_queue_size);
+  p.validate();
+  config.slam = slamParams(private_params);
+  config.unknown = reader.unknown(slamSections());
+  return config;
+}
+
 XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh) {
   XmlRpcValue params;
   if (!private_nh.getParam(private_nh.getNamespace(), params) ||
@@ -277,6 +317,29 @@ std::string describe(const MappingNodeConfig& c) {
       << "\nkeyframe_queue_size: " << p.keyframe_queue_size << "\nmarker_scale: " << p.marker_scale
       << "\n# SLAM parameters\n"
       << io::formatSlamParams(c.slam);
+  return out.str();
+}
+
+std::string describe(const LoopClosureNodeConfig& c) {
+  const loop::LoopCloserParams& loop = c.slam.loop;
+  const loop::PlaceRecognitionParams& r = loop.recognition;
+  std::ostringstream out;
+  out << "config: " << (c.node.config_file.empty() ? "(defaults)" : c.node.config_file)
+      << "\nkeyframe_queue_size: " << c.node.keyframe_queue_size << "\n# SLAM parameters\n";
+  // The loop closer's sections of the whole file; place recognition in short.
+  const YAML::Node all = YAML::Load(io::formatSlamParams(c.slam));
+  for (const char* section : {"loop_closure", "loop_verification"}) {
+    YAML::Node only;
+    only[section] = all[section];
+    out << YAML::Dump(only) << "\n";
+  }
+  out << "place_recognition: ORB " << r.appearance.max_features << " features, vocabulary "
+      << (r.vocabulary_file.empty() ? "learned from the first " +
+                                          std::to_string(r.online_training_keyframes) + " keyframes"
+                                    : r.vocabulary_file)
+      << ", newest " << r.recent_keyframes_excluded << " keyframes excluded, "
+      << r.min_consistent_queries << " consistent queries, geometric check "
+      << r.geometry.min_inliers << " inliers\n";
   return out.str();
 }
 

@@ -1,6 +1,8 @@
 #include "scale_drift_slam/ros/slam_messages.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -65,7 +67,8 @@ scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe) {
   return msg;
 }
 
-map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg) {
+map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg,
+                                     std::string* image_problem) {
   map::KeyframeMessage keyframe;
   keyframe.keyframe.id = msg.id;
   keyframe.keyframe.timestamp = msg.header.stamp.toSec();
@@ -89,7 +92,15 @@ map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg) {
   for (const scale_drift_slam::KeyframeObservation& o : msg.earlier_observations) {
     keyframe.earlier_observations.push_back({o.keyframe_id, o.point_id, Eigen::Vector2d(o.x, o.y)});
   }
-  if (!msg.image.data.empty()) keyframe.image = fromMono8Msg(msg.image);
+  if (image_problem) image_problem->clear();
+  if (!msg.image.data.empty()) {
+    try {
+      keyframe.image = fromMono8Msg(msg.image);
+    } catch (const std::invalid_argument& e) {
+      if (!image_problem) throw;
+      *image_problem = e.what();
+    }
+  }
   return keyframe;
 }
 
@@ -119,16 +130,22 @@ scale_drift_slam::MapUpdate toMapUpdateMsg(const map::MapUpdate& update) {
     msg.corrected_keyframe_ids.push_back(id);
     msg.keyframe_corrections.push_back(toSim3Msg(C));
   }
+  for (const auto& [from, to] : update.loop_links) {
+    msg.loop_link_from.push_back(from);
+    msg.loop_link_to.push_back(to);
+  }
   return msg;
 }
 
 map::MapUpdate fromMapUpdateMsg(const scale_drift_slam::MapUpdate& msg) {
   if (msg.keyframe_ids.size() != msg.keyframe_poses.size() ||
       msg.point_ids.size() != msg.point_positions.size() ||
-      msg.corrected_keyframe_ids.size() != msg.keyframe_corrections.size()) {
+      msg.corrected_keyframe_ids.size() != msg.keyframe_corrections.size() ||
+      msg.loop_link_from.size() != msg.loop_link_to.size()) {
     throw std::invalid_argument(
         "MapUpdate arrays of different lengths (keyframe_ids/keyframe_poses, "
-        "point_ids/point_positions or corrected_keyframe_ids/keyframe_corrections)");
+        "point_ids/point_positions, corrected_keyframe_ids/keyframe_corrections or "
+        "loop_link_from/loop_link_to)");
   }
   map::MapUpdate update;
   update.map_version = msg.map_version;
@@ -155,7 +172,123 @@ map::MapUpdate fromMapUpdateMsg(const scale_drift_slam::MapUpdate& msg) {
     update.keyframe_corrections.emplace_back(msg.corrected_keyframe_ids[i],
                                              fromSim3Msg(msg.keyframe_corrections[i]));
   }
+  for (std::size_t i = 0; i < msg.loop_link_from.size(); ++i)
+    update.loop_links.emplace_back(msg.loop_link_from[i], msg.loop_link_to[i]);
   return update;
+}
+
+scale_drift_slam::Sim3Constraint toSim3ConstraintMsg(const loop::LoopConstraint& constraint) {
+  scale_drift_slam::Sim3Constraint msg;
+  msg.from_keyframe_id = constraint.current_id;
+  msg.to_keyframe_id = constraint.loop_id;
+  msg.measurement = toSim3Msg(constraint.S_current_loop);
+  for (std::size_t i = 0; i < 7; ++i)
+    msg.information[8 * i] = 1.0;  // identity, row-major 7x7
+  msg.inliers = static_cast<std::uint32_t>(std::max(0, constraint.num_inliers));
+  msg.matches = static_cast<std::uint32_t>(std::max(0, constraint.num_matches));
+  msg.scale_pairs = static_cast<std::uint32_t>(std::max(0, constraint.num_scale_pairs));
+  msg.rmse_px = constraint.rmse_px;
+  return msg;
+}
+
+loop::LoopConstraint fromSim3ConstraintMsg(const scale_drift_slam::Sim3Constraint& msg) {
+  constexpr std::uint64_t kMaxId = std::numeric_limits<map::KeyframeId>::max();
+  if (msg.from_keyframe_id > kMaxId || msg.to_keyframe_id > kMaxId) {
+    throw std::invalid_argument("Sim3Constraint: keyframe id out of range (" +
+                                std::to_string(msg.from_keyframe_id) + " -> " +
+                                std::to_string(msg.to_keyframe_id) + ")");
+  }
+  if (msg.from_keyframe_id == msg.to_keyframe_id) {
+    throw std::invalid_argument("Sim3Constraint: from and to are the same keyframe " +
+                                std::to_string(msg.from_keyframe_id));
+  }
+  loop::LoopConstraint constraint;
+  constraint.current_id = static_cast<map::KeyframeId>(msg.from_keyframe_id);
+  constraint.loop_id = static_cast<map::KeyframeId>(msg.to_keyframe_id);
+  constraint.S_current_loop = fromSim3Msg(msg.measurement);
+  constraint.scale = constraint.S_current_loop.scale();
+  constraint.T_current_loop =
+      geometry::SE3(constraint.S_current_loop.rotation(),
+                    constraint.S_current_loop.translation() / constraint.scale);
+  constraint.num_inliers = static_cast<int>(msg.inliers);
+  constraint.num_matches = static_cast<int>(msg.matches);
+  constraint.num_scale_pairs = static_cast<int>(msg.scale_pairs);
+  constraint.rmse_px = msg.rmse_px;
+  return constraint;
+}
+
+scale_drift_slam::RelocalisationRequest toRelocalisationRequestMsg(
+    const map::RelocalisationRequest& request) {
+  scale_drift_slam::RelocalisationRequest msg;
+  msg.header.stamp = ros::Time(request.timestamp);
+  msg.frame_index = request.frame_index;
+  msg.map_version = request.map_version;
+  msg.image = toMono8Msg(request.image, msg.header);
+  return msg;
+}
+
+map::RelocalisationRequest fromRelocalisationRequestMsg(
+    const scale_drift_slam::RelocalisationRequest& msg) {
+  if (msg.image.data.empty()) {
+    throw std::invalid_argument("relocalisation request of frame " +
+                                std::to_string(msg.frame_index) + " carries no image");
+  }
+  map::RelocalisationRequest request;
+  request.frame_index = msg.frame_index;
+  request.timestamp = msg.header.stamp.toSec();
+  request.map_version = msg.map_version;
+  request.image = fromMono8Msg(msg.image);
+  return request;
+}
+
+scale_drift_slam::RelocalisationAnswer toRelocalisationAnswerMsg(
+    const map::RelocalisationAnswer& answer) {
+  scale_drift_slam::RelocalisationAnswer msg;
+  msg.header.stamp = ros::Time(answer.timestamp);
+  msg.frame_index = answer.frame_index;
+  msg.success = answer.success;
+  msg.reason = answer.reason;
+  msg.keyframe_id = answer.keyframe_id;
+  msg.T_cam_world = toPoseMsg(answer.T_cam_world);
+  msg.map_version = answer.map_version;
+  msg.inliers = static_cast<std::uint32_t>(std::max(0, answer.inliers));
+  msg.points.reserve(answer.points.size());
+  for (const map::RelocalisationAnswer::FoundPoint& p : answer.points) {
+    scale_drift_slam::FoundPoint point;
+    point.point_id = p.id;
+    point.u = p.px.x();
+    point.v = p.px.y();
+    point.x = p.xy.x();
+    point.y = p.xy.y();
+    msg.points.push_back(point);
+  }
+  return msg;
+}
+
+map::RelocalisationAnswer fromRelocalisationAnswerMsg(
+    const scale_drift_slam::RelocalisationAnswer& msg) {
+  map::RelocalisationAnswer answer;
+  answer.frame_index = msg.frame_index;
+  answer.timestamp = msg.header.stamp.toSec();
+  answer.success = msg.success;
+  answer.reason = msg.reason;
+  answer.keyframe_id = msg.keyframe_id;
+  answer.map_version = msg.map_version;
+  answer.inliers = static_cast<int>(msg.inliers);
+  if (msg.success) {
+    answer.T_cam_world = checkedPose(
+        msg.T_cam_world, "relocalisation answer of frame " + std::to_string(msg.frame_index));
+  }
+  answer.points.reserve(msg.points.size());
+  for (const scale_drift_slam::FoundPoint& p : msg.points) {
+    const Eigen::Vector2d px(p.u, p.v), xy(p.x, p.y);
+    if (!px.allFinite() || !xy.allFinite()) {
+      throw std::invalid_argument("relocalisation answer: point " + std::to_string(p.point_id) +
+                                  " has non-finite coordinates");
+    }
+    answer.points.push_back({p.point_id, px, xy});
+  }
+  return answer;
 }
 
 scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result) {

@@ -5,6 +5,9 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <opencv2/imgproc.hpp>
 
+#include "scale_drift_slam/ros/conversions.h"
+#include "scale_drift_slam/ros/frames.h"
+
 namespace scale_drift_slam::ros_visualization {
 namespace {
 
@@ -78,8 +81,13 @@ visualization_msgs::MarkerArray keyframeMarkers(
                                colour(0.2f, 0.4f, 1.0f));
   Marker path = lineMarker(header, "keyframe_path", Marker::LINE_STRIP, 0.1 * frustum_size,
                            colour(0.2f, 0.8f, 1.0f));
-  Marker edges = lineMarker(header, "loop_edges", Marker::LINE_LIST, 0.3 * frustum_size,
+  Marker edges = lineMarker(header, "loop_edges", Marker::LINE_LIST, 0.5 * frustum_size,
                             colour(1.0f, 0.2f, 0.2f));
+  // The keyframes a loop joins, as balls: a loop edge is often shorter than the path is wide.
+  Marker ends = lineMarker(header, "loop_edges", Marker::SPHERE_LIST, 2.0 * frustum_size,
+                           colour(1.0f, 0.2f, 0.2f));
+  ends.id = 1;
+  ends.scale.y = ends.scale.z = ends.scale.x;
   // Frustum corners in the camera's optical frame: apex at 0, image rectangle at depth d.
   const double d = frustum_size, w = 0.6 * frustum_size, h = 0.45 * frustum_size;
   const std::vector<Eigen::Vector3d> corners = {{-w, -h, d}, {w, -h, d}, {w, h, d}, {-w, h, d}};
@@ -96,13 +104,60 @@ visualization_msgs::MarkerArray keyframeMarkers(
   }
   for (const auto& [from, to] : loops) {
     if (!map.hasKeyframe(from) || !map.hasKeyframe(to)) continue;
-    edges.points.push_back(
-        toPoint(T_map_world * map.keyframe(from).T_kf_world.inverseTranslation()));
-    edges.points.push_back(toPoint(T_map_world * map.keyframe(to).T_kf_world.inverseTranslation()));
+    for (const map::KeyframeId id : {from, to}) {
+      edges.points.push_back(
+          toPoint(T_map_world * map.keyframe(id).T_kf_world.inverseTranslation()));
+    }
   }
+  ends.points = edges.points;
   visualization_msgs::MarkerArray markers;
-  markers.markers = {finish(frustums, 2), finish(path, 2), finish(edges, 2)};
+  markers.markers = {finish(frustums, 2), finish(path, 2), finish(edges, 2), finish(ends, 2)};
   return markers;
+}
+
+geometry_msgs::PoseStamped pathPose(const geometry::SE3& T_cam_world, double timestamp,
+                                    const geometry::SE3& T_map_world,
+                                    const std::string& map_frame) {
+  static const geometry::SE3 T_optical_body = ros_frames::bodyFromOptical().inverse();
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = ros::Time(timestamp);
+  pose.header.frame_id = map_frame;
+  pose.pose = ros_conversions::toPoseMsg(T_map_world * T_cam_world.inverse() * T_optical_body);
+  return pose;
+}
+
+CameraPath::CameraPath(const geometry::SE3& T_map_world, std::string map_frame,
+                       std::size_t max_poses)
+    : T_map_world_(T_map_world), max_poses_(max_poses) {
+  path_.header.frame_id = std::move(map_frame);
+}
+
+void CameraPath::add(double timestamp, const geometry::SE3& T_cam_world,
+                     std::optional<map::KeyframeId> reference_keyframe) {
+  trajectory_.add(timestamp, T_cam_world, reference_keyframe);
+  if (trajectory_.size() > 2 * max_poses_) trajectory_.keepNewest(max_poses_);
+  path_.poses.push_back(pathPose(T_cam_world, timestamp, T_map_world_, path_.header.frame_id));
+  if (path_.poses.size() > max_poses_) path_.poses.erase(path_.poses.begin());
+}
+
+void CameraPath::rebuild() {
+  const std::vector<map::CorrectedTrajectory::Frame>& frames = trajectory_.frames();
+  const std::size_t first = frames.size() > max_poses_ ? frames.size() - max_poses_ : 0;
+  path_.poses.clear();
+  for (std::size_t i = first; i < frames.size(); ++i) {
+    path_.poses.push_back(
+        pathPose(frames[i].T_cam_world, frames[i].timestamp, T_map_world_, path_.header.frame_id));
+  }
+}
+
+void CameraPath::clear() {
+  trajectory_.clear();
+  path_.poses.clear();
+}
+
+const nav_msgs::Path& CameraPath::message(const ros::Time& stamp) {
+  path_.header.stamp = stamp;
+  return path_;
 }
 
 visualization_msgs::MarkerArray deleteAllMarkers(const std_msgs::Header& header) {

@@ -1,7 +1,6 @@
 #include "scale_drift_slam/sim/circle_experiment.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -29,33 +28,19 @@ void CircleExperimentParams::validate() const {
 
 SimulationRun runCircleExperiment(const CircleExperimentParams& params, std::uint32_t seed) {
   params.validate();
-  const auto start = std::chrono::steady_clock::now();
-  const double cpu_start = processCpuSeconds();
   std::mt19937 rng(seed);
   const SimulatedWorld world = makeCircleWorld(params.world, rng);
-  const SimulatedVoParams vo_params = voParamsForNoise(params.vo, params.noise_px);
-  SimulatedVisualOdometry vo(world.camera, vo_params);
-  for (std::size_t i = 0; i < world.T_cam_world.size(); ++i)
-    vo.processFrame(i, measureFrame(world, i, params.noise_px, rng), world.T_cam_world[i]);
-  const auto vo_end = std::chrono::steady_clock::now();
-
-  const std::size_t last = vo.keyframes().size() - 1;
-  const loop::LoopConstraintResult loop =
-      measureLoop(vo, last, 0, world.camera.focal_length, params.loop);
-  if (!loop.success) {
-    throw std::runtime_error("circle experiment: the loop could not be measured: " + loop.reason);
-  }
-  const auto loop_end = std::chrono::steady_clock::now();
-  SimulationRun run = correctRun(vo, world, {loop.constraint}, params.correction);
-  run.experiment = "circle";
-  run.seed = seed;
-  run.noise_px = params.noise_px;
-  run.vo_time_s = std::chrono::duration<double>(vo_end - start).count();
-  run.loop_time_s = std::chrono::duration<double>(loop_end - vo_end).count();
-  run.total_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run.total_cpu_time_s = processCpuSeconds() - cpu_start;
-  return run;
+  // The loop between the last keyframe and the first, measured from the observations.
+  const LoopMeasurer measure_loop = [&](const SimulatedVisualOdometry& vo) {
+    const loop::LoopConstraintResult loop =
+        measureLoop(vo, vo.keyframes().size() - 1, 0, world.camera.focal_length, params.loop);
+    if (!loop.success) {
+      throw std::runtime_error("circle experiment: the loop could not be measured: " + loop.reason);
+    }
+    return std::vector<loop::LoopConstraint>{loop.constraint};
+  };
+  return runExperiment("circle", world, voParamsForNoise(params.vo, params.noise_px),
+                       params.noise_px, seed, rng, measure_loop, params.correction);
 }
 
 std::vector<double> paperNoiseLevels() {

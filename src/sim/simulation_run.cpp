@@ -142,6 +142,30 @@ SimulationRun correctRun(const SimulatedVisualOdometry& vo, const SimulatedWorld
   return run;
 }
 
+SimulationRun runExperiment(const std::string& name, const SimulatedWorld& world,
+                            const SimulatedVoParams& vo_params, double noise_px, std::uint32_t seed,
+                            std::mt19937& rng, const LoopMeasurer& measure_loops,
+                            const CorrectionOptions& correction) {
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = processCpuSeconds();
+  SimulatedVisualOdometry vo(world.camera, vo_params);
+  for (std::size_t i = 0; i < world.T_cam_world.size(); ++i)
+    vo.processFrame(i, measureFrame(world, i, noise_px, rng), world.T_cam_world[i]);
+  const auto vo_end = std::chrono::steady_clock::now();
+  const std::vector<loop::LoopConstraint> loops = measure_loops(vo);
+  const auto loop_end = std::chrono::steady_clock::now();
+  SimulationRun run = correctRun(vo, world, loops, correction);
+  run.experiment = name;
+  run.seed = seed;
+  run.noise_px = noise_px;
+  run.vo_time_s = std::chrono::duration<double>(vo_end - start).count();
+  run.loop_time_s = std::chrono::duration<double>(loop_end - vo_end).count();
+  run.total_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.total_cpu_time_s = processCpuSeconds() - cpu_start;
+  return run;
+}
+
 double processCpuSeconds() {
   return static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
 }

@@ -2,14 +2,17 @@
 // the loop closure on their own threads), on a TUM, EuRoC or KITTI folder or a rosbag. Writes
 // DIR/trajectory.txt (every tracked frame, corrected by the loop closures, TUM, T_world_cam),
 // DIR/trajectory_as_tracked.txt (the poses as they were output live), DIR/keyframes.txt (the
-// mapper's final keyframes, TUM) and DIR/summary.json (counts, loops, per-stage timing, memory).
+// mapper's final keyframes, TUM), DIR/frames.csv (each frame's tracking state, counts and
+// message) and DIR/summary.json (counts, loops, per-stage timing, memory).
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 
 #include <opencv2/core.hpp>
@@ -35,7 +38,8 @@ Runs the monocular SLAM offline on DATASET: a TUM folder (rgb.txt [+ camera.yaml
 folder (mav0/cam0/data.csv + sensor.yaml), a KITTI odometry folder (image_0/, times.txt,
 calib.txt) or a rosbag (*.bag).
   --out DIR            output folder: trajectory.txt (corrected by loop closures),
-                       trajectory_as_tracked.txt, keyframes.txt (TUM), summary.json
+                       trajectory_as_tracked.txt, keyframes.txt (TUM), frames.csv,
+                       summary.json
   --calib FILE         calibration YAML (default: the dataset's own, or the bag's CameraInfo)
   --config FILE        SLAM parameters (default: built-in defaults = config/default.yaml)
   --topic NAME         bag image topic (default /camera/image_raw)
@@ -149,6 +153,24 @@ nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
   return loops;
 }
 
+/// frames.csv: one line per frame, what the tracker made of it (for plots and diagnosis).
+std::ofstream openFrameLog(const fs::path& path) {
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error("cannot write '" + path.string() + "'");
+  file << "frame,timestamp,state,rejected,visible,found,inliers,keyframes,relocalised,message\n";
+  return file;
+}
+
+void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameResult& r,
+              std::ofstream* file) {
+  std::string message = r.message;
+  std::replace(message.begin(), message.end(), '"', '\'');
+  *file << index << ',' << std::fixed << std::setprecision(6) << frame.timestamp << ','
+        << trackingStateName(r.state) << ',' << r.rejected << ',' << r.num_visible << ','
+        << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ',' << r.relocalised
+        << ",\"" << message << "\"\n";
+}
+
 int run(const io::CommandLine& args) {
   const auto start = std::chrono::steady_clock::now();
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
@@ -180,6 +202,7 @@ int run(const io::CommandLine& args) {
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::vector<io::StampedPose> trajectory;
+  std::ofstream frame_log = openFrameLog(out / "frames.csv");
   io::StageTimings timings;
   std::map<std::string, int> states;
   int frames = 0, rejected = 0;
@@ -206,6 +229,7 @@ int run(const io::CommandLine& args) {
       if (r.state != tracking::TrackingState::kInitializing) timings.add("frame", frame_ms);
     }
     if (r.has_pose) trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
+    logFrame(frames - 1, *frame, r, &frame_log);
     for (const std::string& line : slam.takeLog())
       std::cout << (progress ? "\n" : "") << line << "\n";
     if (progress && (frames % 10 == 0 || frames == static_cast<int>(total))) {
@@ -237,6 +261,7 @@ int run(const io::CommandLine& args) {
                                   {"observations", slam.map().numObservations()},
                                   {"loops", loopsJson(slam)},
                                   {"relocalisations", slam.relocalisations()},
+                                  {"map_restarts", slam.mapRestarts()},
                                   {"timing", timings.toJson()},
                                   {"startup_ms", startup_ms},
                                   {"peak_memory_mib", peak_mib}};
@@ -246,7 +271,8 @@ int run(const io::CommandLine& args) {
   for (const auto& [state, count] : states)
     std::cout << " " << state << " " << count;
   std::cout << "\nloops closed: " << loopsJson(slam).size()
-            << ", relocalisations: " << slam.relocalisations();
+            << ", relocalisations: " << slam.relocalisations()
+            << ", young maps discarded: " << slam.mapRestarts();
   std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
             << " points, " << slam.map().numObservations() << " observations\n"
             << timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib

@@ -11,6 +11,12 @@ void KeyframeRuleParams::validate() const {
   if (!(distance_to_depth_ratio > 0.0) || !std::isfinite(distance_to_depth_ratio)) {
     throw std::invalid_argument("keyframe rule: distance_to_depth_ratio must be > 0");
   }
+  if (!(min_tracked_ratio >= 0.0 && min_tracked_ratio < 1.0)) {
+    throw std::invalid_argument("keyframe rule: min_tracked_ratio must be in [0, 1)");
+  }
+  if (!(min_distance_fraction >= 0.0 && min_distance_fraction <= 1.0)) {
+    throw std::invalid_argument("keyframe rule: min_distance_fraction must be in [0, 1]");
+  }
 }
 
 double medianSceneDepth(const geometry::SE3& T_cam_world,
@@ -32,7 +38,8 @@ double medianSceneDepth(const geometry::SE3& T_cam_world,
 KeyframeDecision decideKeyframe(
     const Eigen::Vector3d& camera_centre_world,
     const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
-    double scene_depth, const KeyframeRuleParams& params) {
+    double scene_depth, const KeyframeRuleParams& params,
+    const std::optional<TrackedPoints>& tracked) {
   params.validate();
   if (!(scene_depth > 0.0) || !std::isfinite(scene_depth)) {
     throw std::invalid_argument("keyframe rule: the scene depth must be positive and finite");
@@ -48,6 +55,12 @@ KeyframeDecision decideKeyframe(
     }
   }
   decision.drop = decision.distance > decision.threshold;
+  if (!decision.drop && tracked && tracked->at_last_keyframe > 0) {
+    decision.view_leaving_map =
+        tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe &&
+        decision.distance > params.min_distance_fraction * decision.threshold;
+    decision.drop = decision.view_leaving_map;
+  }
   return decision;
 }
 

@@ -104,4 +104,49 @@ MotionPrior MotionPriorEstimator::estimate(
   return prior;
 }
 
+std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
+    const std::vector<ImagePyramid>& frames, const std::vector<FlowSeed>& seeds,
+    const geometry::SE3& T_guess, const geometry::CameraModel& camera) {
+  Carried carried;
+  carried.T_cam_world = T_guess;
+  for (std::size_t i = 0; i < seeds.size(); ++i) {
+    carried.seed.push_back(i);
+    carried.px.push_back(seeds[i].px);
+  }
+  for (std::size_t f = 1; f < frames.size() && !carried.px.empty(); ++f) {
+    std::vector<cv::Point2f> to;
+    std::vector<unsigned char> ok;
+    flow_.track(frames[f - 1], frames[f], carried.px, &to, &ok);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < to.size(); ++i) {
+      if (!ok[i]) continue;
+      carried.seed[kept] = carried.seed[i];
+      carried.px[kept++] = to[i];
+    }
+    carried.seed.resize(kept);
+    carried.px.resize(kept);
+  }
+  if (static_cast<int>(carried.px.size()) < params_.min_tracks) return std::nullopt;
+  if (frames.size() <= 1) return carried;
+  mapping::MotionOnlyInput input;
+  input.T_cam_world_guess = T_guess;
+  input.focal_length_px = 0.5 * (camera.calibration().fx + camera.calibration().fy);
+  for (std::size_t i = 0; i < carried.px.size(); ++i) {
+    input.observations.push_back(
+        {seeds[carried.seed[i]].p_world,
+         camera.undistortToNormalized(Eigen::Vector2d(carried.px[i].x, carried.px[i].y))});
+  }
+  const mapping::MotionOnlyResult result =
+      mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+  Carried inliers;
+  inliers.T_cam_world = result.T_cam_world;
+  for (std::size_t i = 0; i < carried.px.size(); ++i) {
+    if (!result.inlier[i]) continue;
+    inliers.seed.push_back(carried.seed[i]);
+    inliers.px.push_back(carried.px[i]);
+  }
+  if (static_cast<int>(inliers.px.size()) < params_.min_tracks) return std::nullopt;
+  return inliers;
+}
+
 }  // namespace scale_drift_slam::tracking

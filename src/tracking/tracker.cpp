@@ -53,9 +53,11 @@ void TrackerParams::validate() const {
         "tracker.local_recent_keyframes must be >= 1, "
         "local_nearest_keyframes >= 0, local_covisibility_min_shared >= 1");
   }
-  if (max_rejected_frames < 1 || relocalisation_retry_frames < 1) {
+  if (max_rejected_frames < 1 || relocalisation_retry_frames < 1 || restart_after_lost_frames < 1 ||
+      restart_below_keyframes < 0) {
     throw std::invalid_argument(
-        "tracker.max_rejected_frames and relocalisation_retry_frames must be >= 1");
+        "tracker.max_rejected_frames, relocalisation_retry_frames and restart_after_lost_frames "
+        "must be >= 1, restart_below_keyframes >= 0");
   }
   if (retire_after_searches < 1 || !(retire_found_ratio >= 0.0 && retire_found_ratio <= 1.0)) {
     throw std::invalid_argument(
@@ -108,12 +110,14 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
     grey = toGrey(image, encoding);
   } catch (const std::invalid_argument& e) {
     rejectFrame(e.what(), &result);
+    restartYoungLostMap(&result);
     return result;
   }
   const std::string problem =
       frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {
     rejectFrame(problem, &result);
+    restartYoungLostMap(&result);
     return result;
   }
   rejected_in_row_ = 0;
@@ -127,8 +131,11 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
       track(timestamp, pyramid, &result);
     }
   } catch (const cv::Exception& e) {
-    // An image OpenCV cannot process must not end the run: report it, keep the state.
+    // An image OpenCV cannot process must not end the run: report it, keep the state (and the
+    // loop correction to report, which was taken from pending_loop_correction_ already).
+    const std::optional<geometry::Sim3> loop_correction = result.loop_correction;
     result = FrameResult{};
+    result.loop_correction = loop_correction;
     result.timestamp = timestamp;
     result.rejected = true;
     result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
@@ -136,6 +143,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   if (state_ == TrackingState::kLost && !result.rejected) {
     requestRelocalisation(timestamp, pyramid, &result);
   }
+  restartYoungLostMap(&result);
   if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
   result.state = state_;
   if (result.has_pose) {
@@ -160,13 +168,36 @@ void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
   result->state = state_;
 }
 
+void Tracker::restartYoungLostMap(FrameResult* result) {
+  lost_in_row_ = state_ == TrackingState::kLost ? lost_in_row_ + 1 : 0;
+  const std::size_t keyframes = map_.numKeyframes();
+  if (lost_in_row_ < params_.restart_after_lost_frames ||
+      keyframes >= static_cast<std::size_t>(params_.restart_below_keyframes)) {
+    return;
+  }
+  // A fresh tracker: nothing of the young map may leak into the next one. Only the frame
+  // counter goes on (relocalisation answers are matched by it).
+  const std::uint64_t frame_index = frame_index_;
+  *this = Tracker(camera_, params_);
+  frame_index_ = frame_index;
+  result->map_restarted = true;
+  result->state = state_;
+  result->has_pose = false;
+  result->relocalisation_request.reset();
+  result->message += (result->message.empty() ? "" : "; ") + std::string("lost for ") +
+                     std::to_string(params_.restart_after_lost_frames) + " frames with a map of " +
+                     std::to_string(keyframes) +
+                     " keyframes (too young to relocalise in): discarded, initialising again";
+}
+
 void Tracker::requestRelocalisation(double timestamp, const ImagePyramid& image,
                                     FrameResult* result) {
   if (relocalisation_ && frame_index_ - relocalisation_->frame_index <
                              static_cast<std::uint64_t>(params_.relocalisation_retry_frames)) {
-    return;  // one request at a time
+    relocalisation_->frames.push_back(image);  // one request at a time; keep the frames since
+    return;
   }
-  relocalisation_ = PendingRelocalisation{frame_index_, image};
+  relocalisation_ = PendingRelocalisation{frame_index_, {image}};
   map::RelocalisationRequest request;
   request.frame_index = frame_index_;
   request.timestamp = timestamp;
@@ -183,16 +214,28 @@ bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
   // predates a loop correction the tracker has applied since.
   if (!answer.success || state_ != TrackingState::kLost) return false;
   if (answer.map_version < last_loop_version_) return false;
-  std::vector<Measurement> found;
+  std::vector<map::PointId> ids;
+  std::vector<FlowSeed> seeds;
   for (const map::RelocalisationAnswer::FoundPoint& p : answer.points) {
-    if (map_.hasPoint(p.id)) found.push_back({p.id, p.px, p.xy});
+    if (!map_.hasPoint(p.id)) continue;
+    ids.push_back(p.id);
+    seeds.push_back({cv::Point2f(static_cast<float>(p.px.x()), static_cast<float>(p.px.y())),
+                     map_.point(p.id).p_world});
   }
-  if (static_cast<int>(found.size()) < params_.min_inliers) return false;
-  // Track the next frame from the relocalised one: the flow carries the found points over.
-  previous_measurements_ = std::move(found);
-  previous_image_ = pending.image;
-  T_previous_world_ = T_before_previous_world_ = answer.T_cam_world;
-  last_scene_depth_ = sceneDepth(answer.T_cam_world);
+  // The answer is about the requested frame; the camera has moved on since: carry the found
+  // points through the frames seen meanwhile to the last one, and track on from there.
+  const std::optional<MotionPriorEstimator::Carried> carried =
+      motion_prior_.carry(pending.frames, seeds, answer.T_cam_world, *camera_);
+  if (!carried || static_cast<int>(carried->px.size()) < params_.min_inliers) return false;
+  previous_measurements_.clear();
+  for (std::size_t i = 0; i < carried->px.size(); ++i) {
+    const Eigen::Vector2d px(carried->px[i].x, carried->px[i].y);
+    previous_measurements_.push_back(
+        {ids[carried->seed[i]], px, camera_->undistortToNormalized(px)});
+  }
+  previous_image_ = pending.frames.back();
+  T_previous_world_ = T_before_previous_world_ = carried->T_cam_world;
+  last_scene_depth_ = sceneDepth(carried->T_cam_world);
   resume_from_relocalisation_ = true;
   return true;
 }
@@ -251,6 +294,7 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   }
   map_.addKeyframe(std::move(first_kf));
   map_.addKeyframe(std::move(second_kf));
+  tracked_at_keyframe_ = static_cast<int>(previous_measurements_.size());
   state_ = TrackingState::kGood;
   T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
   previous_image_ = image;

@@ -60,13 +60,11 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
   candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
   result->times.filters = elapsedMs(&clock);
-  // 6. The keyframe rule (only while tracking is good).
-  if (state_ == TrackingState::kGood) {
-    const KeyframeDecision decision =
-        decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
-                       params_.keyframes);
-    if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
-  }
+  // 6. The keyframe rule (tracking is good or weak here, not lost).
+  const KeyframeDecision decision =
+      decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
+                     params_.keyframes, TrackedPoints{result->num_inliers, tracked_at_keyframe_});
+  if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
   result->times.keyframe = elapsedMs(&clock);
 }
 
@@ -177,6 +175,7 @@ void Tracker::dropKeyframe(double timestamp, const ImagePyramid& image,
     map_.addPoint(std::move(point));
   }
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
+  tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
   result->keyframes.push_back(std::move(message));
 }
 

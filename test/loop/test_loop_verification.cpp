@@ -21,13 +21,7 @@ constexpr int kWidth = 640, kHeight = 480;
 constexpr double kWall = 4.0;  // the far wall is the plane z = 4 m
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 450.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = kWidth;
-  c.height = kHeight;
-  return geometry::makeCameraModel(c);
+  return tracking::test::pinholeCamera(450.0);
 }
 
 struct View {

@@ -111,6 +111,13 @@ TEST(CorrectedTrajectory, FramesMoveWithTheirReferenceKeyframe) {
   EXPECT_NEAR((centre(0) - someSimilarity(2.0) * c).norm(), 0.0, 1e-9);
   EXPECT_NEAR((centre(1) - someSimilarity(0.5) * c).norm(), 0.0, 1e-9);
   EXPECT_NEAR((centre(2) - someSimilarity(0.5) * c).norm(), 0.0, 1e-9);
+
+  trajectory.keepNewest(5);  // fewer than that: all stay
+  EXPECT_EQ(trajectory.size(), 3u);
+  trajectory.keepNewest(2);
+  ASSERT_EQ(trajectory.size(), 2u);
+  EXPECT_EQ(trajectory.frames()[0].timestamp, 2.0);
+  EXPECT_EQ(trajectory.frames()[1].timestamp, 3.0);
 }
 
 }  // namespace

@@ -19,21 +19,11 @@ namespace {
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 450.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = kWidth;
-  c.height = kHeight;
-  return geometry::makeCameraModel(c);
+  return tracking::test::pinholeCamera(450.0);
 }
 
-/// A sideways sweep with a slow turn, looking at the far wall (T_world_cam).
 geometry::SE3 cameraPose(int k) {
-  const double t = 0.04 * k;
-  const Eigen::Vector3d centre(1.2 * std::sin(t), 0.2 * std::sin(0.7 * t), -1.0 + 0.3 * t);
-  return geometry::SE3(
-      geometry::expSO3(Eigen::Vector3d(0.05 * std::sin(0.5 * t), 0.25 * std::sin(t), 0.0)), centre);
+  return tracking::test::sweepPose(k);
 }
 
 TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
@@ -85,6 +75,68 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   EXPECT_LE(first_relocalised, 33);
   EXPECT_LT(worst_error, 0.03);
   EXPECT_GE(slam.relocalisations(), 1);
+}
+
+// Lost in a map too young to relocalise in (no vocabulary yet): after restart_after_lost_frames
+// lost frames the tracker discards it and initialises again; the mapper and the loop closer follow,
+// and the new map is built from the new keyframes only.
+TEST(Relocalisation, AYoungMapLostTooLongIsDiscardedAndANewOneStarts) {
+  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto cam = camera();
+  for (const bool thread : {false, true}) {
+    SlamParams params;
+    params.mapping_thread = thread;
+    params.tracker.restart_after_lost_frames = 6;
+    SlamSystem slam(cam, params);
+    const auto process = [&](double t, const cv::Mat& image) {
+      return slam.processFrame(t, image, tracking::PixelEncoding::kMono8);
+    };
+    const auto render = [&](int k) {
+      return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
+    };
+    for (int k = 0; k < 30; ++k)
+      process(0.1 * k, render(k));
+    ASSERT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
+    const std::size_t young_keyframes = slam.tracker().trackingMap().numKeyframes();
+    ASSERT_LT(young_keyframes, 30u);
+
+    const cv::Mat black = cv::Mat::zeros(kHeight, kWidth, CV_8UC1);
+    int restarted_at = -1;
+    for (int i = 0; i < 10; ++i) {
+      const tracking::FrameResult r = process(3.0 + 0.1 * i, black);
+      if (r.map_restarted) {
+        EXPECT_EQ(restarted_at, -1) << "restarted twice";
+        restarted_at = i;
+        EXPECT_EQ(r.state, tracking::TrackingState::kInitializing) << r.message;
+        EXPECT_NE(r.message.find("initialising again"), std::string::npos) << r.message;
+      }
+    }
+    // Lost at the third black frame, discarded six lost frames later.
+    EXPECT_EQ(restarted_at, 7);
+    EXPECT_EQ(slam.mapRestarts(), 1);
+    EXPECT_EQ(slam.tracker().trackingMap().numKeyframes(), 0u);
+
+    // The camera is uncovered somewhere else: a new map, tracked against the truth.
+    std::vector<Eigen::Vector3d> estimate, truth;
+    for (int k = 40; k < 80; ++k) {
+      const tracking::FrameResult r = process(4.0 + 0.1 * k, render(k));
+      if (!r.has_pose) continue;
+      estimate.push_back(r.T_cam_world.inverseTranslation());
+      truth.push_back(cameraPose(k).translation());
+    }
+    slam.finish();
+    ASSERT_GE(estimate.size(), 30u) << "the new map did not start";
+    EXPECT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
+    const geometry::Sim3 S = evaluation::alignSim3(estimate, truth);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < estimate.size(); ++i)
+      worst = std::max(worst, (S * estimate[i] - truth[i]).norm());
+    EXPECT_LT(worst, 0.03);
+    // The mapper holds the new map only, the corrected trajectory the new map's frames only.
+    EXPECT_EQ(slam.map().numKeyframes(), slam.tracker().trackingMap().numKeyframes());
+    EXPECT_EQ(slam.trajectory().frames().size(), estimate.size());
+    EXPECT_GE(slam.trajectory().frames().front().timestamp, 8.0);
+  }
 }
 
 }  // namespace

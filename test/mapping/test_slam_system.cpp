@@ -20,21 +20,11 @@ namespace {
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 450.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = kWidth;
-  c.height = kHeight;
-  return geometry::makeCameraModel(c);
+  return tracking::test::pinholeCamera(450.0);
 }
 
-// A smooth sideways sweep with a slow turn, looking at the far wall (T_world_cam).
 geometry::SE3 cameraPose(int k) {
-  const double t = 0.04 * k;
-  const Eigen::Vector3d centre(1.2 * std::sin(t), 0.2 * std::sin(0.7 * t), -1.0 + 0.3 * t);
-  return geometry::SE3(
-      geometry::expSO3(Eigen::Vector3d(0.05 * std::sin(0.5 * t), 0.25 * std::sin(t), 0.0)), centre);
+  return tracking::test::sweepPose(k);
 }
 
 struct Outcome {

@@ -82,6 +82,51 @@ TEST(NodeParams, ConfigFileThenOverrides) {
   EXPECT_EQ(slamParams(q).tracker.motion_prior.min_rotation_sigma, 0.1 + 0.2);
 }
 
+TEST(NodeParams, LoopClosureNodeReadsTheLoopSections) {
+  const LoopClosureNodeConfig defaults = loopClosureNodeConfig(emptyStruct());
+  EXPECT_EQ(defaults.node.keyframe_queue_size, 100);
+  EXPECT_TRUE(defaults.unknown.empty());
+  EXPECT_NE(describe(defaults).find("loop_verification"), std::string::npos) << describe(defaults);
+  EXPECT_NE(describe(defaults).find("place_recognition: ORB 1000 features"), std::string::npos)
+      << describe(defaults);
+
+  XmlRpcValue p = emptyStruct();
+  p["config"] = writeFile("sds_loop.yaml",
+                          "loop_closure:\n  enabled: false\nplace_recognition:\n"
+                          "  min_consistent_queries: 2\n  appearance:\n    grid_cols: 6\n");
+  p["loop_closure"]["relocalisation_candidates"] = 5;
+  p["loop_verification"]["min_final_inliers"] = 30;
+  p["place_recognition"]["recent_keyframes_excluded"] = 20;
+  p["place_recognition"]["appearance"]["max_features"] = 800;
+  p["place_recognition"]["geometry"]["min_inliers"] = 50;
+  p["keyframe_queue_size"] = 10;
+  const LoopClosureNodeConfig c = loopClosureNodeConfig(p);
+  EXPECT_FALSE(c.slam.loop.enabled);  // from the file
+  EXPECT_EQ(c.slam.loop.recognition.min_consistent_queries, 2);
+  EXPECT_EQ(c.slam.loop.recognition.appearance.grid_cols, 6);
+  EXPECT_EQ(c.slam.loop.relocalisation_candidates, 5);  // overrides
+  EXPECT_EQ(c.slam.loop.verification.min_final_inliers, 30);
+  EXPECT_EQ(c.slam.loop.recognition.recent_keyframes_excluded, 20);
+  EXPECT_EQ(c.slam.loop.recognition.appearance.max_features, 800);
+  EXPECT_EQ(c.slam.loop.recognition.geometry.min_inliers, 50);
+  EXPECT_EQ(c.node.keyframe_queue_size, 10);
+  EXPECT_TRUE(c.unknown.empty());
+
+  const auto loop_error = [](XmlRpcValue q) { return errorOf([&] { loopClosureNodeConfig(q); }); };
+  p = emptyStruct();
+  p["place_recognition"]["appearance"]["no_such_key"] = 1;
+  EXPECT_NE(loop_error(p).find("appearance.no_such_key"), std::string::npos) << loop_error(p);
+  p = emptyStruct();
+  p["loop_verification"]["max_scale"] = -2.0;
+  EXPECT_NE(loop_error(p).find("scale"), std::string::npos) << loop_error(p);
+  p = emptyStruct();
+  p["keyframe_queue_size"] = 0;
+  EXPECT_NE(loop_error(p).find("~keyframe_queue_size"), std::string::npos) << loop_error(p);
+  p = emptyStruct();
+  p["loop_closure"]["enabled"] = std::string("maybe");
+  EXPECT_NE(loop_error(p).find("loop_closure.enabled"), std::string::npos) << loop_error(p);
+}
+
 TEST(NodeParams, BadValuesNameTheParameter) {
   const auto tracking_error = [](XmlRpcValue p) { return errorOf([&] { trackingNodeConfig(p); }); };
   const auto mapping_error = [](XmlRpcValue p) { return errorOf([&] { mappingNodeConfig(p); }); };

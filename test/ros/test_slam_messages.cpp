@@ -1,6 +1,7 @@
-// The SLAM messages survive the trip through ROS messages: a keyframe and a map update come back
-// as the core made them (map update points to float32 precision), the tracking status carries
-// the frame's verdict, and malformed messages are refused with the reason.
+// The SLAM messages survive the trip through ROS messages: a keyframe, a map update, a loop
+// constraint and the relocalisation request and answer come back as the core made them (map
+// update points to float32 precision), the tracking status carries the frame's verdict, and
+// malformed messages are refused with the reason.
 
 #include <limits>
 
@@ -76,6 +77,18 @@ TEST(SlamMessages, MalformedKeyframesAreRefused) {
   scale_drift_slam::Keyframe no_image = msg;
   no_image.image = sensor_msgs::Image();
   EXPECT_TRUE(fromKeyframeMsg(no_image).image.empty());
+
+  // Receivers that can do without the image take the keyframe and hear why the image is unusable.
+  std::string problem = "stale";
+  EXPECT_FALSE(fromKeyframeMsg(msg, &problem).image.empty());
+  EXPECT_EQ(problem, "");
+  const map::KeyframeMessage without = fromKeyframeMsg(colour, &problem);
+  EXPECT_TRUE(without.image.empty());
+  EXPECT_EQ(without.keyframe.id, 17u);
+  EXPECT_NE(problem.find("bgr8"), std::string::npos) << problem;
+  EXPECT_TRUE(fromKeyframeMsg(truncated, &problem).image.empty());
+  EXPECT_FALSE(problem.empty());
+  EXPECT_THROW(fromKeyframeMsg(nan_point, &problem), std::invalid_argument);  // not the image
 }
 
 TEST(SlamMessages, MapUpdateRoundTrip) {
@@ -88,6 +101,7 @@ TEST(SlamMessages, MapUpdateRoundTrip) {
   u.point_positions = {{7, {1.25, -2.5, 10.0}}, {8, {0.1, 0.2, 0.3}}};
   u.removed_points = {5, 6};
   u.keyframe_corrections = {{3, geometry::Sim3::exp(0.5 * xi)}, {4, *u.S_new_old}};
+  u.loop_links = {{4, 0}, {90, 12}};
   const map::MapUpdate back = fromMapUpdateMsg(toMapUpdateMsg(u));
   EXPECT_EQ(back.map_version, 99u);
   ASSERT_TRUE(back.S_new_old.has_value());
@@ -108,6 +122,7 @@ TEST(SlamMessages, MapUpdateRoundTrip) {
       (back.keyframe_corrections[0].second.matrix() - u.keyframe_corrections[0].second.matrix())
           .norm(),
       1e-12);
+  EXPECT_EQ(back.loop_links, u.loop_links);
 
   map::MapUpdate window;  // a window BA result carries no correction
   window.map_version = 5;
@@ -132,6 +147,126 @@ TEST(SlamMessages, MalformedMapUpdatesAreRefused) {
   bad_scale.has_loop_correction = true;
   bad_scale.S_new_old.scale = -1.0;
   EXPECT_THROW(fromMapUpdateMsg(bad_scale), std::invalid_argument);
+  scale_drift_slam::MapUpdate links = msg;
+  links.loop_link_from.push_back(3);
+  EXPECT_THROW(fromMapUpdateMsg(links), std::invalid_argument);
+}
+
+loop::LoopConstraint someConstraint() {
+  loop::LoopConstraint c;
+  c.current_id = 95;
+  c.loop_id = 2;
+  c.T_current_loop = somePose(0.3);
+  c.scale = 1.0873;
+  c.S_current_loop = geometry::Sim3::fromScale(c.T_current_loop.rotation(),
+                                               c.scale * c.T_current_loop.translation(), c.scale);
+  c.num_matches = 180;
+  c.num_inliers = 131;
+  c.num_scale_pairs = 64;
+  c.rmse_px = 0.71;
+  return c;
+}
+
+TEST(SlamMessages, LoopConstraintRoundTrip) {
+  const loop::LoopConstraint c = someConstraint();
+  const scale_drift_slam::Sim3Constraint msg = toSim3ConstraintMsg(c);
+  EXPECT_EQ(msg.from_keyframe_id, 95u);
+  EXPECT_EQ(msg.to_keyframe_id, 2u);
+  EXPECT_DOUBLE_EQ(msg.measurement.scale, 1.0873);
+  for (int r = 0; r < 7; ++r) {
+    for (int k = 0; k < 7; ++k)
+      EXPECT_EQ(msg.information[7 * r + k], r == k ? 1.0 : 0.0);
+  }
+  const loop::LoopConstraint back = fromSim3ConstraintMsg(msg);
+  EXPECT_EQ(back.current_id, 95u);
+  EXPECT_EQ(back.loop_id, 2u);
+  EXPECT_LT((back.S_current_loop.matrix() - c.S_current_loop.matrix()).norm(), 1e-12);
+  EXPECT_LT((back.T_current_loop.matrix() - c.T_current_loop.matrix()).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(back.scale, c.scale);
+  EXPECT_EQ(back.num_matches, 180);
+  EXPECT_EQ(back.num_inliers, 131);
+  EXPECT_EQ(back.num_scale_pairs, 64);
+  EXPECT_EQ(back.rmse_px, 0.71);
+}
+
+TEST(SlamMessages, MalformedLoopConstraintsAreRefused) {
+  const scale_drift_slam::Sim3Constraint msg = toSim3ConstraintMsg(someConstraint());
+  for (const double scale : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+                             std::numeric_limits<double>::infinity()}) {
+    scale_drift_slam::Sim3Constraint bad = msg;
+    bad.measurement.scale = scale;
+    EXPECT_THROW(fromSim3ConstraintMsg(bad), std::invalid_argument) << scale;
+  }
+  scale_drift_slam::Sim3Constraint nan_translation = msg;
+  nan_translation.measurement.translation.y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(fromSim3ConstraintMsg(nan_translation), std::invalid_argument);
+  scale_drift_slam::Sim3Constraint zero_rotation = msg;
+  zero_rotation.measurement.rotation = geometry_msgs::Quaternion();
+  zero_rotation.measurement.rotation.w = 0.0;
+  EXPECT_THROW(fromSim3ConstraintMsg(zero_rotation), std::invalid_argument);
+  scale_drift_slam::Sim3Constraint same = msg;
+  same.to_keyframe_id = same.from_keyframe_id;
+  EXPECT_THROW(fromSim3ConstraintMsg(same), std::invalid_argument);
+  scale_drift_slam::Sim3Constraint huge = msg;
+  huge.to_keyframe_id = 1ull << 40;
+  EXPECT_THROW(fromSim3ConstraintMsg(huge), std::invalid_argument);
+}
+
+TEST(SlamMessages, RelocalisationRoundTrip) {
+  map::RelocalisationRequest request;
+  request.frame_index = 4711;
+  request.timestamp = 1016.5;
+  request.map_version = 88;
+  request.image = cv::Mat(24, 32, CV_8UC1);
+  cv::randu(request.image, 0, 255);
+  const scale_drift_slam::RelocalisationRequest request_msg = toRelocalisationRequestMsg(request);
+  EXPECT_EQ(request_msg.image.encoding, "mono8");
+  const map::RelocalisationRequest request_back = fromRelocalisationRequestMsg(request_msg);
+  EXPECT_EQ(request_back.frame_index, 4711u);
+  EXPECT_EQ(request_back.timestamp, 1016.5);
+  EXPECT_EQ(request_back.map_version, 88u);
+  EXPECT_EQ(cv::norm(request_back.image, request.image, cv::NORM_INF), 0.0);
+  scale_drift_slam::RelocalisationRequest no_image = request_msg;
+  no_image.image = sensor_msgs::Image();
+  EXPECT_THROW(fromRelocalisationRequestMsg(no_image), std::invalid_argument);
+  scale_drift_slam::RelocalisationRequest colour = request_msg;
+  colour.image.encoding = "rgb8";
+  EXPECT_THROW(fromRelocalisationRequestMsg(colour), std::invalid_argument);
+
+  map::RelocalisationAnswer answer;
+  answer.frame_index = 4711;
+  answer.timestamp = 1016.5;
+  answer.success = true;
+  answer.keyframe_id = 31;
+  answer.T_cam_world = somePose(2.0);
+  answer.map_version = 87;
+  answer.inliers = 2;
+  answer.points = {{5, {100.5, 200.25}, {-0.1, 0.2}}, {9, {10.0, 20.0}, {0.3, -0.4}}};
+  const scale_drift_slam::RelocalisationAnswer answer_msg = toRelocalisationAnswerMsg(answer);
+  const map::RelocalisationAnswer back = fromRelocalisationAnswerMsg(answer_msg);
+  EXPECT_EQ(back.frame_index, 4711u);
+  EXPECT_EQ(back.timestamp, 1016.5);
+  EXPECT_TRUE(back.success);
+  EXPECT_EQ(back.reason, "");
+  EXPECT_EQ(back.keyframe_id, 31u);
+  EXPECT_LT((back.T_cam_world.matrix() - answer.T_cam_world.matrix()).norm(), 1e-15);
+  EXPECT_EQ(back.map_version, 87u);
+  EXPECT_EQ(back.inliers, 2);
+  ASSERT_EQ(back.points.size(), 2u);
+  EXPECT_EQ(back.points[1].id, 9u);
+  EXPECT_EQ(back.points[0].px, answer.points[0].px);
+  EXPECT_EQ(back.points[1].xy, answer.points[1].xy);
+
+  scale_drift_slam::RelocalisationAnswer nan_pose = answer_msg;
+  nan_pose.T_cam_world.position.x = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(fromRelocalisationAnswerMsg(nan_pose), std::invalid_argument);
+  nan_pose.success = false;  // a failed answer's pose is not read
+  nan_pose.reason = "no keyframe looks like this frame";
+  nan_pose.points.clear();
+  EXPECT_EQ(fromRelocalisationAnswerMsg(nan_pose).reason, "no keyframe looks like this frame");
+  scale_drift_slam::RelocalisationAnswer nan_point = answer_msg;
+  nan_point.points[0].x = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(fromRelocalisationAnswerMsg(nan_point), std::invalid_argument);
 }
 
 TEST(SlamMessages, TrackingStatusCarriesTheVerdict) {

@@ -158,19 +158,52 @@ def write_tum(path, poses):
             f.write('%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n' % ((stamp,) + tuple(t) + tuple(q)))
 
 
+def quaternion_product(a, b):
+    """a * b for quaternions given as (x, y, z, w)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
+# The rotation of the camera optical frame in the camera body frame (REP 103): x y z w.
+Q_BODY_OPTICAL = (-0.5, 0.5, -0.5, 0.5)
+
+
+def path_poses(path):
+    """A nav_msgs/Path of camera body poses as optical-frame poses [(stamp, t, q)]."""
+    poses = []
+    for p in path.poses:
+        t, q = p.pose.position, p.pose.orientation
+        poses.append((p.header.stamp.to_sec(), (t.x, t.y, t.z),
+                      quaternion_product((q.x, q.y, q.z, q.w), Q_BODY_OPTICAL)))
+    return poses
+
+
+def ate_ratio(groundtruth, poses, name):
+    """Writes poses [(stamp, t, q)] as work_dir()/name and returns (ATE / path length, report)."""
+    estimate = os.path.join(work_dir(), name)
+    write_tum(estimate, poses)
+    report = evaluate(groundtruth, estimate)
+    return report['ate']['rmse'] / report['ground_truth_path_length'], report
+
+
 def evaluate(groundtruth, estimate):
     """evaluate_trajectory --json (ATE after Sim(3) alignment): the parsed report."""
     out = subprocess.check_output([tool('evaluate_trajectory'), groundtruth, estimate, '--json'])
     return json.loads(out.decode())
 
 
-def read_images(bag, topic='/camera/image_raw', count=None):
-    """The first `count` sensor_msgs/Image of a bag, and its first CameraInfo."""
+def read_images(bag, topic='/camera/image_raw', count=None, skip=0):
+    """`count` sensor_msgs/Image of a bag after the first `skip`, and its first CameraInfo."""
     import rosbag
-    images, info = [], None
+    images, info, seen = [], None, 0
     with rosbag.Bag(bag) as b:
         for t, msg, _ in b.read_messages(topics=[topic, '/camera/camera_info']):
             if t == topic:
+                seen += 1
+                if seen <= skip:
+                    continue
                 images.append(msg)
                 if count is not None and len(images) >= count:
                     break

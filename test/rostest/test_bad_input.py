@@ -2,7 +2,11 @@
 """Bad input does not take a node down, and each node says what is wrong: images before any
 CameraInfo, a NaN CameraInfo, an unsupported encoding, time jumping backwards (the tracker and
 then the map restart), invalid parameters at start-up (the node exits at once naming the
-parameter). Also: every common encoding and compressed images are tracked."""
+parameter); between the nodes: keyframes without an image or with a colour one (the loop closure
+node stores them without a loop search), loop constraints with a non-positive scale, naming
+unknown keyframes or of another session (the mapping node refuses them), a relocalisation request
+without an image (answered with the reason). Also: every common encoding and compressed images
+are tracked."""
 
 import os
 import subprocess
@@ -13,7 +17,8 @@ import unittest
 import rospy
 import rostest
 from rosgraph_msgs.msg import Log
-from scale_drift_slam.msg import Keyframe, MapUpdate, TrackingStatus
+from scale_drift_slam.msg import (Keyframe, MapUpdate, RelocalisationAnswer, RelocalisationRequest,
+                                  Sim3Constraint, TrackingStatus)
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_srvs.srv import Trigger
 
@@ -112,11 +117,14 @@ class BadInput(unittest.TestCase):
         self.assertEqual(restarted[-1].state, TrackingStatus.GOOD, restarted[-1])
         self.assertTrue(rosout.wait_for('mapping_node', 'new tracker session', level=Log.WARN),
                         rosout.dump('mapping_node'))
+        self.assertTrue(rosout.wait_for('loop_closure_node', 'new loop closer',
+                                        'new tracker session', level=Log.WARN),
+                        rosout.dump('loop_closure_node'))
         self.assertTrue(sds.wait_until(
             lambda: self.updates[-1].session == restarted[-1].session, 10))
         new_keyframes = [k for k in self.keyframes if k.session == restarted[-1].session]
         self.assertEqual(new_keyframes[0].id, 0)
-        self.assertAlive('/tracking_node', '/mapping_node')
+        self.assertAlive('/tracking_node', '/mapping_node', '/loop_closure_node')
 
         # Both nodes reset on request and say so.
         for node in ('/tracking_node', '/mapping_node'):
@@ -154,6 +162,9 @@ class BadInput(unittest.TestCase):
             ('tracking_node', '_image_queue_size:=many', '~image_queue_size: must be an int'),
             ('tracking_node', '_config:=/nonexistent.yaml', '~config'),
             ('mapping_node', '_window_ba/window_size:=0', 'window_size'),
+            ('loop_closure_node', '_loop_verification/max_scale:=-2', 'max_scale'),
+            ('loop_closure_node', '_place_recognition/appearance/max_features:=many',
+             'appearance.max_features'),
         ]
         for i, (node, argument, expected) in enumerate(cases):
             started = time.time()
@@ -164,7 +175,77 @@ class BadInput(unittest.TestCase):
             self.assertIn('invalid parameter', output)
             self.assertIn(expected, output)
             self.assertLess(time.time() - started, 10)
-        self.assertAlive('/tracking_node', '/mapping_node')
+        self.assertAlive('/tracking_node', '/mapping_node', '/loop_closure_node')
+
+    def test_4_bad_messages_between_the_nodes(self):
+        rosout = self.rosout
+        answers = []
+        rospy.Subscriber('/relocalisation_answers', RelocalisationAnswer, answers.append,
+                         queue_size=10)
+        keyframe_pub = rospy.Publisher('/keyframes', Keyframe, queue_size=10)
+        constraint_pub = rospy.Publisher('/loop_constraints', Sim3Constraint, queue_size=10)
+        request_pub = rospy.Publisher('/relocalisation_requests', RelocalisationRequest,
+                                      queue_size=10)
+        for pub, subscribers in ((keyframe_pub, 2), (constraint_pub, 1), (request_pub, 1)):
+            assert sds.wait_until(lambda: pub.get_num_connections() >= subscribers, 30), pub.name
+        time.sleep(0.5)
+
+        # Keyframes of a new session: without an image, then with a colour image.
+        session = 4242
+        for i, image in enumerate((None, sds.reencode(self.images[0], 'rgb8'))):
+            keyframe = Keyframe()
+            keyframe.header.stamp = rospy.Time.from_sec(2000.0 + i)
+            keyframe.session, keyframe.id = session, i
+            keyframe.T_kf_world.orientation.w = 1.0
+            keyframe.camera = self.info
+            if image is not None:
+                keyframe.image = image
+            keyframe_pub.publish(keyframe)
+            time.sleep(0.3)
+        self.assertTrue(rosout.wait_for('loop_closure_node', 'keyframe 0 carries no image',
+                                        'no loop search', level=Log.WARN),
+                        rosout.dump('loop_closure_node'))
+        self.assertTrue(rosout.wait_for('mapping_node', 'new tracker session', level=Log.WARN))
+
+        # Loop constraints the mapping node must refuse.
+        def constraint(scale, from_id, to_id, of_session):
+            c = Sim3Constraint()
+            c.session, c.from_keyframe_id, c.to_keyframe_id = of_session, from_id, to_id
+            c.measurement.rotation.w, c.measurement.scale = 1.0, scale
+            return c
+        constraint_pub.publish(constraint(-1.0, 1, 0, session))
+        self.assertTrue(rosout.wait_for('mapping_node', 'loop 1 -> 0 refused', 'non-positive',
+                                        level=Log.WARN), rosout.dump('mapping_node'))
+        constraint_pub.publish(constraint(1.0, 77, 78, session))
+        self.assertTrue(rosout.wait_for('mapping_node', 'loop 77 -> 78 not applied',
+                                        'no keyframe 77', level=Log.WARN))
+        constraint_pub.publish(constraint(1.0, 1, 0, 999))
+        self.assertTrue(rosout.wait_for('mapping_node', 'loop 1 -> 0 refused',
+                                        'tracker session 999', level=Log.WARN))
+
+        # Relocalisation requests: without an image (refused at once), then one the loop closer
+        # cannot place yet (two keyframes, no vocabulary): both answered with the reason.
+        request = RelocalisationRequest()
+        request.session, request.frame_index = session, 7
+        request_pub.publish(request)
+        self.assertTrue(sds.wait_until(lambda: answers, 10))
+        self.assertFalse(answers[0].success)
+        self.assertIn('carries no image', answers[0].reason)
+        self.assertTrue(rosout.wait_for('loop_closure_node', 'cannot relocalise frame 7',
+                                        level=Log.ERROR))
+        request.frame_index, request.image = 8, self.images[0]
+        request_pub.publish(request)
+        self.assertTrue(sds.wait_until(lambda: len(answers) >= 2, 10))
+        self.assertEqual((answers[1].frame_index, answers[1].success), (8, False))
+        self.assertIn('vocabulary', answers[1].reason)
+        self.assertTrue(rosout.wait_for('loop_closure_node', 'keyframe 1',
+                                        'its image is unusable', level=Log.WARN))
+        self.assertAlive('/tracking_node', '/mapping_node', '/loop_closure_node')
+        print('what the mapping and loop closure nodes said about the bad messages:')
+        for name, level, text in rosout.find('', level=Log.WARN):
+            if name.endswith(('mapping_node', 'loop_closure_node')) and 'session' not in text:
+                print('  %s [%s] %s' % (name, {Log.WARN: 'WARN', Log.ERROR: 'ERROR'}.get(level),
+                                        text))
 
 
 if __name__ == '__main__':

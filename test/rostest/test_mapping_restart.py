@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """The mapping node killed (SIGKILL) in the middle of a bag and restarted by roslaunch: tracking
 goes on publishing tf meanwhile, the new mapping node builds a new map from the following
-keyframes, the tracker applies its map updates (continuing above its own map version), and the
-trajectory from tf stays within 1% of the path."""
+keyframes, the tracker and the loop closure node apply its map updates (continuing above their own
+map versions), and the trajectory from tf stays within 1% of the path."""
 
 import os
 import sys
@@ -44,6 +44,8 @@ class MappingRestart(unittest.TestCase):
         rospy.wait_for_service('/mapping_node/save_trajectory', timeout=30)
         rospy.wait_for_service('/tracking_node/reset', timeout=30)
         tracking_pid = sds.node_pid('/tracking_node')
+        loop_pid = sds.node_pid('/loop_closure_node')
+        self.assertIsNotNone(loop_pid)
         time.sleep(1.0)
 
         player = sds.play_bag(bag, rate=0.5, wait=False)
@@ -73,6 +75,8 @@ class MappingRestart(unittest.TestCase):
         self.assertEqual(len(set(u.session for u in updates)), 1)
         self.assertTrue(rosout.wait_for('tracking_node', 'new mapper', level=Log.WARN),
                         rosout.dump('tracking_node'))
+        self.assertTrue(rosout.wait_for('loop_closure_node', 'new mapper', level=Log.WARN),
+                        rosout.dump('loop_closure_node'))
         applied = statuses[-1].map_version
         self.assertGreaterEqual(applied, new_updates[0].map_version)
         self.assertLessEqual(applied, new_updates[-1].map_version)
@@ -85,6 +89,7 @@ class MappingRestart(unittest.TestCase):
         self.assertEqual(len(tracked), len(statuses) - first)
         self.assertFalse([s for s in statuses if s.state == TrackingStatus.LOST])
         self.assertEqual(sds.node_pid('/tracking_node'), tracking_pid)
+        self.assertEqual(sds.node_pid('/loop_closure_node'), loop_pid)
 
         poses = []
         for s in tracked:

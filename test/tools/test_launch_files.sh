@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Every launch file parses with its documented arguments and starts the nodes it promises, with the
-# calibration and parameter files it names present; rviz/slam.rviz is valid YAML showing the map
-# cloud, markers, path, tf and debug image. Loads them with roslaunch's own loader (no master,
-# no process started). ~3 s.
+# Every launch file parses with its documented arguments and starts the nodes it promises (the three
+# SLAM nodes), with the calibration and parameter files it names present; rviz/slam.rviz is valid
+# YAML showing the map cloud, markers (loop edges included), path, tf and debug image. Loads them
+# with roslaunch's own loader (no master, no process started). ~3 s.
 set -euo pipefail
 export ROS_HOME="${SDS_TEST_OUTPUT_DIR:?}/launch_files_ros_home"
 mkdir -p "$ROS_HOME"
@@ -30,26 +30,30 @@ def load(name, *args):
 
 def check(expected, name, *args):
     nodes, params = load(name, *args)
-    assert nodes == expected, '%s %s: nodes %s, expected %s' % (name, args, nodes, expected)
+    assert nodes == sorted(expected), '%s %s: nodes %s, expected %s' % (name, args, nodes, expected)
     return params
 
 
-slam = ['/mapping_node', '/tracking_node']
+slam = ['/loop_closure_node', '/mapping_node', '/tracking_node']
 params = check(slam, 'slam.launch')
 assert params['/tracking_node/calibration_file'] == ''
 assert params['/tracking_node/map_frame'] == 'map'
-check(['/mapping_node', '/rviz', '/tracking_node'], 'slam.launch', 'rviz:=true')
-params = check(['/mapping_node', '/player', '/tracking_node'], 'bag.launch', 'bag:=/some.bag')
+assert params['/loop_closure_node/config'] == params['/tracking_node/config']
+check(['/loop_closure_node', '/mapping_node', '/rviz', '/tracking_node'], 'slam.launch',
+      'rviz:=true')
+check(['/mapping_node', '/tracking_node'], 'slam.launch', 'loop_closure:=false')
+params = check(slam + ['/player'], 'bag.launch', 'bag:=/some.bag')
 assert params['/use_sim_time'] is True, 'bag.launch does not use simulated time'
 assert params['/tracking_node/image_queue_size'] == 100
-params = check(['/mapping_node', '/play_sequence', '/tracking_node'], 'demo.launch')
+params = check(['/loop_closure_node', '/mapping_node', '/play_sequence', '/tracking_node'],
+               'demo.launch')
 assert params['/use_sim_time'] is True
 params = check(slam, 'euroc.launch')
 assert params['/tracking_node/calibration_file'].endswith('config/euroc_cam0.yaml')
 assert '/use_sim_time' not in params
-check(['/mapping_node', '/player', '/tracking_node'], 'euroc.launch', 'bag:=/MH_01_easy.bag')
+check(slam + ['/player'], 'euroc.launch', 'bag:=/MH_01_easy.bag')
 for camera in ('fr1', 'fr2', 'fr3'):
-    params = check(['/mapping_node', '/player', '/tracking_node'], 'tum.launch',
+    params = check(slam + ['/player'], 'tum.launch',
                    'camera:=' + camera, 'bag:=/x.bag')
     assert params['/tracking_node/calibration_file'].endswith('config/tum_%s.yaml' % camera)
 
@@ -59,6 +63,8 @@ topics = {d.get('Topic') or d.get('Marker Topic') or d.get('Image Topic') for d 
 for topic in ('/map_cloud', '/map_markers', '/path', '/debug_image'):
     assert topic in topics, 'rviz config shows no ' + topic
 assert 'rviz/TF' in {d['Class'] for d in displays}
+markers = next(d for d in displays if d.get('Marker Topic') == '/map_markers')
+assert markers['Namespaces'].get('loop_edges') is True, 'rviz config hides the loop edges'
 assert config['Visualization Manager']['Global Options']['Fixed Frame'] == 'map'
 print('launch files test passed')
 PY

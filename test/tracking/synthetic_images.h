@@ -2,12 +2,38 @@
 // Test helpers: a reproducible textured image (random rectangles and discs on a smooth
 // gradient), corner-rich like a real scene, for the image-based tracking tests.
 
+#include <cmath>
+#include <memory>
 #include <random>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "scale_drift_slam/geometry/camera_model.h"
+#include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/geometry/so3.h"
+
 namespace scale_drift_slam::tracking::test {
+
+/// An undistorted 640x480 pinhole camera with the principal point at the image centre.
+inline std::shared_ptr<const geometry::CameraModel> pinholeCamera(double focal_length_px) {
+  geometry::CameraCalibration c;
+  c.fx = c.fy = focal_length_px;
+  c.cx = 319.5;
+  c.cy = 239.5;
+  c.width = 640;
+  c.height = 480;
+  return geometry::makeCameraModel(c);
+}
+
+/// Frame k of a smooth sideways sweep with a slow turn through boxRoom(4, 2, 4), looking at its
+/// far wall (T_world_cam).
+inline geometry::SE3 sweepPose(int k) {
+  const double t = 0.04 * k;
+  const Eigen::Vector3d centre(1.2 * std::sin(t), 0.2 * std::sin(0.7 * t), -1.0 + 0.3 * t);
+  return geometry::SE3(
+      geometry::expSO3(Eigen::Vector3d(0.05 * std::sin(0.5 * t), 0.25 * std::sin(t), 0.0)), centre);
+}
 
 inline cv::Mat texturedImage(int width, int height, unsigned seed) {
   std::mt19937 rng(seed);

@@ -14,13 +14,7 @@ namespace scale_drift_slam::tracking {
 namespace {
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 500.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return geometry::makeCameraModel(c);
+  return tracking::test::pinholeCamera(500.0);
 }
 
 struct WallScene {

@@ -16,13 +16,7 @@ namespace {
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 500.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = kWidth;
-  c.height = kHeight;
-  return geometry::makeCameraModel(c);
+  return tracking::test::pinholeCamera(500.0);
 }
 
 test::TexturedPlane wall(double depth, double tilt, unsigned seed, int w, int h) {

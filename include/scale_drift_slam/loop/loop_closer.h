@@ -36,7 +36,7 @@ struct LoopCloserParams {
   /// Keyframes sharing at least this many map points with the query are connected to it already
   /// (the tracker re-found their points): they are not proposed as loops.
   int covisible_min_shared_points = 15;
-  int relocalisation_candidates = 3;  ///< Places verified per relocalisation request.
+  int relocalisation_candidates = 5;  ///< Keyframes checked per relocalisation request.
   /// The geometric check of relocalisation candidates: looser than a loop's (a lost camera has
   /// often moved on and overlaps its last keyframes only partly; the metric verification that
   /// follows decides). Defaults: the loop's check with min_inliers 30 and min_coverage 0.3.
@@ -75,6 +75,8 @@ class LoopCloser {
   map::RelocalisationAnswer relocalise(const map::RelocalisationRequest& request);
 
   const map::Map& map() const { return map_; }
+  /// The version of the last MapUpdate applied (0: none).
+  std::uint64_t mapVersion() const { return map_version_; }
   std::size_t numKeyframes() const { return map_.numKeyframes(); }
   const LoopCloserParams& params() const { return params_; }
 

@@ -84,9 +84,9 @@ class PlaceRecognizer {
   PlaceQueryResult queryAndAdd(map::KeyframeId id, double timestamp, KeyframeAppearance appearance,
                                const std::unordered_set<map::KeyframeId>& excluded = {});
 
-  /// For relocalisation: the places among all keyframes added so far that look like
-  /// `appearance` (islands scoring at least min_normalized_score of the best), best first, at most
-  /// `max_candidates`, each checked with `geometry` (see LoopCandidate::geometry). No keyframe is
+  /// For relocalisation: the keyframes among all added so far that look most like `appearance`
+  /// (scoring at least min_normalized_score of the best), best first, at most `max_candidates`,
+  /// each checked with `geometry` (see LoopCandidate::geometry). No keyframe is
   /// excluded and the consistency bookkeeping of query() is untouched. Empty until the vocabulary
   /// is ready.
   std::vector<LoopCandidate> findPlaces(const KeyframeAppearance& appearance, int max_candidates,

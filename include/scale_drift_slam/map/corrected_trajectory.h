@@ -28,6 +28,9 @@ class CorrectedTrajectory {
   /// world frame.
   void apply(const MapUpdate& update);
 
+  /// Forgets all but the newest `count` frames (bounds the memory of a long live run).
+  void keepNewest(std::size_t count);
+
   const std::vector<Frame>& frames() const { return frames_; }
   std::size_t size() const { return frames_.size(); }
   void clear() { frames_.clear(); }

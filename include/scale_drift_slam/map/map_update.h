@@ -24,6 +24,12 @@ namespace scale_drift_slam::map {
 /// moves with the world, the camera keeps its orientation relative to it.
 geometry::SE3 correctPose(const geometry::SE3& T_cam_world, const geometry::Sim3& S_new_old);
 
+/// Adds what a keyframe message brings to a map: its new points (those not there yet), the
+/// keyframe with its observations of points the map holds (others are skipped), and the new
+/// points' observations in earlier keyframes the map holds. Throws std::invalid_argument when the
+/// keyframe is already in the map.
+void addKeyframeMessage(const KeyframeMessage& message, Map& map);
+
 /// Applies `update` to `map`: the loop correction S_new_old (if any) to every keyframe and point,
 /// then the listed poses and positions of known ids, then the removals. Updates whose version is
 /// below `*applied_version` are ignored (returns false); otherwise *applied_version becomes the

@@ -8,6 +8,10 @@
 // Whatever arrives for the tracker is applied at the start of the next frame, so tracking never
 // waits for the window BA, a loop correction or a relocalisation. With `mapping_thread = false`
 // the mapper and the loop closer run inline after each frame (deterministic, for tests).
+// When the tracker restarts a young lost map (FrameResult::map_restarted), a restart marker follows
+// the old keyframes down both queues; the mapper and the loop closer start afresh on it, and
+// anything made from the old map that is still under way (map updates, loop constraints,
+// relocalisation answers) is dropped on arrival: each message carries its map generation.
 // Owns the Tracker, the Mapper, the LoopCloser, the queues and the threads.
 
 #include <memory>
@@ -67,23 +71,37 @@ class SlamSystem {
   std::vector<LoopCorrectionStatistics> loops() const;
   BackgroundTimes backgroundTimes() const;
   int relocalisations() const;
+  /// Young lost maps the tracker discarded to initialise again.
+  int mapRestarts() const { return map_restarts_; }
   /// Log lines of the background threads (loops found or refused, relocalisation answers) since
   /// the last call.
   std::vector<std::string> takeLog();
 
  private:
-  using MapperInput = std::variant<map::KeyframeMessage, loop::LoopConstraint>;
-  using LoopInput = std::variant<map::KeyframeMessage, map::MapUpdate, map::RelocalisationRequest>;
-  using TrackerInput = std::variant<map::MapUpdate, map::RelocalisationAnswer>;
+  struct MapRestart {};  ///< The tracker started a new map: so do the receivers.
+  /// A message made by one thread from the map of a generation (number of restarts before it).
+  template <typename Message>
+  struct OfGeneration {
+    std::uint64_t generation = 0;
+    Message message;
+  };
+  using MapperInput =
+      std::variant<map::KeyframeMessage, OfGeneration<loop::LoopConstraint>, MapRestart>;
+  using LoopInput = std::variant<map::KeyframeMessage, OfGeneration<map::MapUpdate>,
+                                 map::RelocalisationRequest, MapRestart>;
+  using TrackerInput = OfGeneration<std::variant<map::MapUpdate, map::RelocalisationAnswer>>;
 
   void drainTrackerInbox();
   void runInline();
+  template <typename Input>
+  void handleSafely(Input input);
   void handle(MapperInput input);
   void handle(LoopInput input);
   void publishUpdate(map::MapUpdate update);
   void log(std::string line);
 
   SlamParams params_;
+  std::shared_ptr<const geometry::CameraModel> camera_;
   tracking::Tracker tracker_;
   Mapper mapper_;
   loop::LoopCloser loop_closer_;
@@ -96,6 +114,9 @@ class SlamSystem {
   BackgroundTimes times_;
   std::vector<std::string> log_;
   int relocalisations_ = 0;
+  int map_restarts_ = 0;
+  // The map generation each thread works on (each touched by its own thread only).
+  std::uint64_t tracker_generation_ = 0, mapper_generation_ = 0, loop_generation_ = 0;
   std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };

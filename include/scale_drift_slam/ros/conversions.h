@@ -30,7 +30,8 @@ geometry_msgs::TransformStamped toTransformStampedMsg(const geometry::SE3& T_par
                                                       const std::string& parent,
                                                       const std::string& child);
 scale_drift_slam::Sim3 toSim3Msg(const geometry::Sim3& S);
-/// Throws std::invalid_argument for a non-positive or non-finite scale.
+/// Throws std::invalid_argument for a non-positive or non-finite scale, a non-finite translation
+/// or a non-finite or zero quaternion.
 geometry::Sim3 fromSim3Msg(const scale_drift_slam::Sim3& msg);
 
 }  // namespace scale_drift_slam::ros_conversions

@@ -51,6 +51,13 @@ struct MappingNodeParams {
   void validate() const;
 };
 
+/// loop_closure_node's own settings (the camera comes with each keyframe: the tracker's own).
+struct LoopClosureNodeParams {
+  std::string config_file;
+  int keyframe_queue_size = 100;  ///< roscpp queue of keyframes (the callback only hands them on).
+  void validate() const;
+};
+
 struct TrackingNodeConfig {
   TrackingNodeParams node;
   mapping::SlamParams slam;
@@ -64,12 +71,21 @@ struct MappingNodeConfig {
   std::vector<std::string> unknown;
 };
 
+struct LoopClosureNodeConfig {
+  LoopClosureNodeParams node;
+  mapping::SlamParams slam;  ///< Uses the loop_closure, loop_verification, place_recognition parts.
+  std::vector<std::string> unknown;
+};
+
 /// Reads everything from the private namespace given as one XmlRpc struct (what
 /// NodeHandle::getParam returns for the namespace). Throws std::runtime_error naming the
 /// parameter: wrong type, invalid value, unreadable or invalid ~config or ~calibration_file.
 TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params);
 MappingNodeConfig mappingNodeConfig(const XmlRpc::XmlRpcValue& private_params);
-/// The SLAM parameters: ~config (or defaults), then the ~<section>/<key> overrides.
+LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_params);
+/// The SLAM parameters: ~config (or defaults), then the ~<section>/<key> overrides (place
+/// recognition's nested keys as ~place_recognition/<group>/<key>, e.g.
+/// ~place_recognition/appearance/max_features).
 mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params);
 
 /// All parameters of the node's private namespace (an empty struct when there are none).
@@ -78,5 +94,6 @@ XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh);
 /// For the start-up log: every setting, one per line.
 std::string describe(const TrackingNodeConfig& config);
 std::string describe(const MappingNodeConfig& config);
+std::string describe(const LoopClosureNodeConfig& config);
 
 }  // namespace scale_drift_slam::ros_params

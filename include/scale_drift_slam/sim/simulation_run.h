@@ -11,7 +11,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -117,6 +119,17 @@ std::vector<geometry::SE3> correctedFramePoses(
 SimulationRun correctRun(const SimulatedVisualOdometry& vo, const SimulatedWorld& world,
                          const std::vector<loop::LoopConstraint>& loops,
                          const CorrectionOptions& options);
+
+/// What an experiment measures on the VO's keyframes: its loop constraints (throws when none).
+using LoopMeasurer =
+    std::function<std::vector<loop::LoopConstraint>(const SimulatedVisualOdometry& vo)>;
+
+/// An experiment from its world on: the VO over every frame (measurements with `noise_px` of
+/// Gaussian noise from `rng`), the loops, both corrections, and the times of each stage.
+SimulationRun runExperiment(const std::string& name, const SimulatedWorld& world,
+                            const SimulatedVoParams& vo_params, double noise_px, std::uint32_t seed,
+                            std::mt19937& rng, const LoopMeasurer& measure_loops,
+                            const CorrectionOptions& correction);
 
 /// Process CPU time in seconds (for the run-time figures).
 double processCpuSeconds();

@@ -2,8 +2,12 @@
 // The keyframe rule (paper/ALGORITHM.md, "Front-end: keyframe dropping"): drop a new keyframe as
 // soon as the distance from the current camera to the closest keyframe exceeds a threshold. The
 // map's scale drifts, so the threshold is a fraction of the scene depth (the median depth of the
-// points the camera tracks), not a fixed distance. Pure functions; any thread.
+// points the camera tracks), not a fixed distance. Our addition for weakly textured scenes and
+// narrow lenses: also drop one when most of the map points tracked at the last keyframe have left
+// the view, so that new points enter the map before the old ones are all gone. Pure functions;
+// any thread.
 
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -17,12 +21,25 @@ namespace scale_drift_slam::tracking {
 struct KeyframeRuleParams {
   /// Drop when the distance to the closest keyframe exceeds this fraction of the scene depth.
   double distance_to_depth_ratio = 0.1;
+  /// Also drop when the map points tracked fall below this fraction of those tracked at the last
+  /// keyframe (0: never)...
+  double min_tracked_ratio = 0.5;
+  /// ...once the camera has moved this fraction of the distance threshold (parallax for the new
+  /// points).
+  double min_distance_fraction = 0.25;
   /// Throws std::invalid_argument naming the bad value.
   void validate() const;
 };
 
+/// Map points tracked in the current frame and in the frame of the last keyframe.
+struct TrackedPoints {
+  int now = 0;
+  int at_last_keyframe = 0;
+};
+
 struct KeyframeDecision {
   bool drop = false;
+  bool view_leaving_map = false;  ///< Dropped for the tracked points, not the distance.
   double distance = 0.0;   ///< To the closest keyframe (map units); infinity when there is none.
   double threshold = 0.0;  ///< distance_to_depth_ratio * scene depth.
   map::KeyframeId closest = 0;
@@ -34,10 +51,12 @@ double medianSceneDepth(const geometry::SE3& T_cam_world,
                         const std::vector<Eigen::Vector3d>& points_world);
 
 /// Applies the rule. `keyframe_centres` are (id, camera centre in the world); with none, the
-/// decision is to drop. Throws std::invalid_argument for a non-positive or non-finite depth.
+/// decision is to drop. Without `tracked`, the distance rule alone (the paper's). Throws
+/// std::invalid_argument for a non-positive or non-finite depth.
 KeyframeDecision decideKeyframe(
     const Eigen::Vector3d& camera_centre_world,
     const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
-    double scene_depth, const KeyframeRuleParams& params);
+    double scene_depth, const KeyframeRuleParams& params,
+    const std::optional<TrackedPoints>& tracked = std::nullopt);
 
 }  // namespace scale_drift_slam::tracking

@@ -6,6 +6,7 @@
 // search regions. Without enough flow tracks it falls back to a constant-velocity guess with a
 // wide uncertainty. Owned by the tracker; single-threaded.
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -60,6 +61,21 @@ class MotionPriorEstimator {
 
   /// The fallback: the guess with the wide uncertainty.
   MotionPrior fallback(const geometry::SE3& T_guess, double scene_depth) const;
+
+  /// Points carried through a run of frames, and the pose at the last frame.
+  struct Carried {
+    geometry::SE3 T_cam_world;
+    std::vector<std::size_t> seed;  ///< Index into the seeds of each surviving point...
+    std::vector<cv::Point2f> px;    ///< ...and its pixel in the last frame.
+  };
+  /// Carries `seeds` (pixels in frames[0]) through `frames` by flow from each frame to the next
+  /// (a jump over several frames is beyond the flow when the camera moves fast) and estimates the
+  /// pose at the last frame by motion-only BA from `T_guess`; only its inliers are returned. For
+  /// a relocalisation answered a few frames after the frame it was asked for. Nothing when fewer
+  /// than min_tracks points survive.
+  std::optional<Carried> carry(const std::vector<ImagePyramid>& frames,
+                               const std::vector<FlowSeed>& seeds, const geometry::SE3& T_guess,
+                               const geometry::CameraModel& camera);
 
  private:
   MotionPriorParams params_;

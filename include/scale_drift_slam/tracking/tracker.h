@@ -40,6 +40,11 @@ struct TrackerParams {
   int max_rejected_frames = 3;            ///< This many unusable frames in a row: lost.
   /// While lost, a relocalisation request not answered within this many frames is sent again.
   int relocalisation_retry_frames = 30;
+  /// Lost this many frames in a row with a map of fewer than `restart_below_keyframes`
+  /// keyframes (too young for place recognition to relocalise in): the map is discarded and
+  /// the tracker initialises again (FrameResult::map_restarted). 0 keyframes: never.
+  int restart_after_lost_frames = 15;
+  int restart_below_keyframes = 30;
   FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -78,6 +83,9 @@ struct FrameResult {
   /// Lost: where is this frame? (for the loop closer; at most one request outstanding).
   std::optional<map::RelocalisationRequest> relocalisation_request;
   bool relocalised = false;  ///< Tracking resumed at this frame from a relocalisation answer.
+  /// The young map was discarded at this frame: initialising again; keyframe and point ids start
+  /// from 0 again, the receivers of the earlier keyframes must drop them.
+  bool map_restarted = false;
   StageTimes times;
   std::string message;
 };
@@ -124,6 +132,8 @@ class Tracker {
   double sceneDepth(const geometry::SE3& T_cam_world) const;
   void rejectFrame(const std::string& reason, FrameResult* result);
   void requestRelocalisation(double timestamp, const ImagePyramid& image, FrameResult* result);
+  /// Counts the frames lost in a row and restarts a young map lost too long.
+  void restartYoungLostMap(FrameResult* result);
 
   std::shared_ptr<const geometry::CameraModel> camera_;
   TrackerParams params_;
@@ -142,11 +152,15 @@ class Tracker {
   map::KeyframeId next_keyframe_id_ = 0;
   map::PointId next_point_id_ = 0;
   int rejected_in_row_ = 0;
+  int lost_in_row_ = 0;
+  int tracked_at_keyframe_ = 0;  ///< Map points seen in the last keyframe (keyframe rule).
   std::optional<geometry::Sim3> pending_loop_correction_;  ///< Reported with the next frame.
   std::uint64_t last_loop_version_ = 0;  ///< Map version of the last loop correction applied.
   struct PendingRelocalisation {
     std::uint64_t frame_index = 0;
-    ImagePyramid image;
+    /// The requested frame, then every frame tracked (in vain) since: the answer's points are
+    /// carried through them by flow.
+    std::vector<ImagePyramid> frames;
   };
   std::optional<PendingRelocalisation> relocalisation_;  ///< The request outstanding.
   bool resume_from_relocalisation_ = false;
