@@ -11,6 +11,7 @@
 
 #include <ceres/ceres.h>
 
+#include "scale_drift_slam/loop/loop_error_distribution.h"
 #include "scale_drift_slam/loop/pose_graph_residuals.h"
 
 namespace scale_drift_slam::loop {
@@ -118,6 +119,9 @@ void PoseGraphOptions::validate() const {
     if (!(value >= 0.0) || !std::isfinite(value)) {
       throw std::invalid_argument(std::string("pose graph: ") + name + " must be finite and >= 0");
     }
+  }
+  if (loop_error_passes < 0) {
+    throw std::invalid_argument("pose graph: loop_error_passes must be >= 0");
   }
   if (num_threads < 1) {
     throw std::invalid_argument("pose graph: num_threads must be >= 1");
@@ -257,14 +261,21 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   const PoseGraphMode mode = options.mode;
   const int ambient = mode == PoseGraphMode::kSim3 ? Sim3::kNumParameters : SE3::kNumParameters;
 
+  // Where LM starts: each loop's error spread along the odometry, or the given vertices.
+  LoopErrorDistribution guess;
+  if (options.loop_error_passes > 0) {
+    guess = distributeLoopErrors(*this, mode, options.loop_error_passes);
+  }
   // Parameter blocks in vertex order; the cost functions and the manifold outlive the problem.
   std::vector<double> parameters(vertices_.size() * ambient);
   std::map<map::KeyframeId, double*> block;
   std::size_t index = 0;
   for (const auto& [id, vertex] : vertices_) {
-    double* data = parameters.data() + ambient * index++;
-    toParameters(mode, vertex.S_kf_world, data);
+    double* data = parameters.data() + ambient * index;
+    toParameters(mode, guess.S_kf_world.empty() ? vertex.S_kf_world : guess.S_kf_world[index],
+                 data);
     block.emplace(id, data);
+    ++index;
   }
   const std::unique_ptr<ceres::Manifold> manifold = makeVertexManifold(mode, options.jacobians);
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
@@ -299,7 +310,8 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   }
   // summary.iterations holds iteration 0 (the initial evaluation) too.
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result.initial_chi2 = 2.0 * summary.initial_cost;  // Ceres minimises 0.5 |L^T r|^2
+  result.guess_chi2 = 2.0 * summary.initial_cost;  // Ceres minimises 0.5 |L^T r|^2
+  result.initial_chi2 = options.loop_error_passes > 0 ? guess.given_chi2 : result.guess_chi2;
   result.final_chi2 = 2.0 * summary.final_cost;
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.termination = ceres::TerminationTypeToString(summary.termination_type) +
