@@ -1,10 +1,9 @@
 // Loop-closure correction speed (issue 3): the Sim(3) and SE(3) pose graphs of the Keble College
 // loop (740 vertices) with analytic and autodiff Jacobians, with and without the loop-error
 // initial guess, their distance to a tightly converged (1e-12) solution and Ceres' floor (the graph
-// started at its optimum), structure-only BA over
-// the whole Keble map (11885 points, 84820 observations) against Ceres solving the same problem,
-// and a synthetic graph of 10,000 keyframes with 50 loop edges. One core. Measures, asserts
-// nothing.
+// started at its optimum); structure-only BA over the whole Keble map (11885 points, 84820
+// observations) against Ceres solving the same problem; a synthetic graph of 10,000 keyframes with
+// 50 loop edges. One core. Measures, asserts nothing.
 
 #include <algorithm>
 #include <cmath>
