@@ -42,6 +42,11 @@ assert params['/loop_closure_node/config'] == params['/tracking_node/config']
 check(['/loop_closure_node', '/mapping_node', '/rviz', '/tracking_node'], 'slam.launch',
       'rviz:=true')
 check(['/mapping_node', '/tracking_node'], 'slam.launch', 'loop_closure:=false')
+check(['/mapping_node', '/player', '/tracking_node'], 'bag.launch', 'bag:=/some.bag',
+      'loop_closure:=false')
+check(['/mapping_node', '/play_sequence', '/tracking_node'], 'demo.launch', 'loop_closure:=false')
+check(['/mapping_node', '/tracking_node'], 'euroc.launch', 'loop_closure:=false')
+check(['/mapping_node', '/tracking_node'], 'tum.launch', 'loop_closure:=false')
 params = check(slam + ['/player'], 'bag.launch', 'bag:=/some.bag')
 assert params['/use_sim_time'] is True, 'bag.launch does not use simulated time'
 assert params['/tracking_node/image_queue_size'] == 100

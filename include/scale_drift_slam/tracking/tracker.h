@@ -29,7 +29,7 @@ namespace scale_drift_slam::tracking {
 struct TrackerParams {
   int pyramid_levels = 4;
   double min_contrast = 3.0;        ///< Frames with a smaller grey-level std are unusable.
-  int good_inliers = 50;            ///< Inliers for "good" tracking (keyframes only then).
+  int good_inliers = 50;            ///< Inliers for "good" tracking (fewer: weak).
   int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
   int local_nearest_keyframes = 6;  ///< ...and of the keyframes closest to the camera among
