@@ -76,7 +76,7 @@ NormalEquations evaluate(const MotionOnlyInput& input, const geometry::SE3& T, d
   return ne;
 }
 
-/// Levenberg-Marquardt on the 6-DoF left update T <- exp(delta) T (paper/ALGORITHM.md,
+/// Levenberg-Marquardt on the 6-DoF left update T <- exp(delta) T (doc/algorithm.md,
 /// "Notation": accept a step only if it lowers the cost, then lower the damping mu, else raise
 /// it). The damping is mu * diag(H) (Marquardt's scaling).
 geometry::SE3 handWrittenLm(const MotionOnlyInput& input,

@@ -12,7 +12,7 @@
 namespace scale_drift_slam::mapping::internal {
 
 /// The SE(3) pose stored as 7 numbers (qx qy qz qw tx ty tz, SE3::toData) with a 6-DoF left
-/// update T <- exp(delta) T (paper/ALGORITHM.md, "Lie groups").
+/// update T <- exp(delta) T (doc/algorithm.md, "Lie groups").
 /// Trick (as in VINS-Mono's pose parametrisation): PlusJacobian is [I_6; 0], and the cost
 /// functions write d r / d delta into the first six columns of their 2x7 Jacobian and zero into
 /// the last. Ceres only ever uses the product J * PlusJacobian, which is then exactly
@@ -51,7 +51,7 @@ constexpr double kMinDepth = 1e-6;
 
 /// The pixel residual r = f (z - proj(R x + t)) of one observation z (normalised coordinates) of
 /// the world point x in the camera T_cam_world = (R, t), proj(y) = (y1/y3, y2/y3)
-/// (paper/ALGORITHM.md, "Notation"; scaled by the focal length f so that the robust kernel width
+/// (doc/algorithm.md, "Notation"; scaled by the focal length f so that the robust kernel width
 /// is in pixels). Jacobians with y = R x + t:
 ///   d r / d delta = -f dproj/dy [-[y]x, I]   (left update of the pose),
 ///   d r / d x     = -f dproj/dy R,
@@ -133,7 +133,7 @@ class ReprojectionCost final : public ceres::SizedCostFunction<2, 7, 3> {
   double focal_length_;
 };
 
-/// Pseudo-Huber rho(r) = 2 b^2 (sqrt(1 + (r/b)^2) - 1) (paper/ALGORITHM.md, "Notation"). Ceres'
+/// Pseudo-Huber rho(r) = 2 b^2 (sqrt(1 + (r/b)^2) - 1) (doc/algorithm.md, "Notation"). Ceres'
 /// SoftLOneLoss(a) is rho(s) = 2 a^2 (sqrt(1 + s / a^2) - 1) of the squared norm s = |r|^2
 /// (ceres/loss_function.h: "a^2 rho(s / a^2)" with rho(s) = 2 (sqrt(1 + s) - 1)), so with a = b
 /// it is exactly the pseudo-Huber of |r|; Ceres minimises 1/2 sum rho, the same minimiser.

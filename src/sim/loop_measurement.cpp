@@ -74,7 +74,7 @@ namespace {
 
 /// The depth (z) of a feature at `xy` by k-nearest-neighbour regression on the points a keyframe
 /// holds (in its camera frame): the median z of the nearest `depth_neighbours` whose projections
-/// lie within `depth_radius_px`; 0 when fewer than that many do (paper/ALGORITHM.md, "Loop
+/// lie within `depth_radius_px`; 0 when fewer than that many do (doc/algorithm.md, "Loop
 /// closure detection", steps 2 and 4).
 double regressedDepth(const std::unordered_map<int, Eigen::Vector3d>& points,
                       const Eigen::Vector2d& xy, double focal_length_px,

@@ -1,4 +1,4 @@
-// The promotion rule of inverse-depth features (paper/ALGORITHM.md, "Front-end: keyframe
+// The promotion rule of inverse-depth features (doc/algorithm.md, "Front-end: keyframe
 // dropping"): a point-only bundle adjustment against a few surrounding keyframes, then a check of
 // the reprojection error in each.
 

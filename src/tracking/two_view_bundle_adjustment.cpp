@@ -8,7 +8,7 @@
 namespace scale_drift_slam::tracking {
 namespace {
 
-/// r = focal (proj(R p + t) - xy), proj(a) = (a1/a3, a2/a3) (paper/ALGORITHM.md, "Notation");
+/// r = focal (proj(R p + t) - xy), proj(a) = (a1/a3, a2/a3) (doc/algorithm.md, "Notation");
 /// R from the quaternion (x y z w, Eigen order), or the identity for the fixed first camera.
 struct ReprojectionResidual {
   ReprojectionResidual(const Eigen::Vector2d& xy, double focal) : xy_(xy), focal_(focal) {}

@@ -24,7 +24,7 @@ geometry::SE3 alignSE3(const std::vector<Eigen::Vector3d>& estimate,
 double positionRmse(const std::vector<Eigen::Vector3d>& estimate,
                     const std::vector<Eigen::Vector3d>& truth);
 
-/// The paper's error measure (paper/ALGORITHM.md, "The paper's evidence"): move the estimate
+/// The paper's error measure (doc/algorithm.md, "The paper's evidence"): move the estimate
 /// rigidly so that its first camera pose equals the true first pose, scale it about the first
 /// camera centre by the least-squares factor over all frames, and return the RMSE of the camera
 /// positions. Poses are T_world_cam.

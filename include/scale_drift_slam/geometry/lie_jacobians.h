@@ -1,5 +1,5 @@
 #pragma once
-// Derivatives of the Lie-group maps used by relative-pose residuals (paper/ALGORITHM.md, "Lie
+// Derivatives of the Lie-group maps used by relative-pose residuals (doc/algorithm.md, "Lie
 // groups" and "Loop closure correction"): the algebra adjoint ad(xi) and the left Jacobian of
 // exp, for SE(3) (tangent (omega, upsilon)) and Sim(3) (tangent (omega, sigma, upsilon)).
 //   exp(xi + d) = exp(Jl(xi) d) exp(xi) + O(d^2),   log(exp(e) exp(xi)) = xi + Jl(xi)^-1 e +

@@ -1,6 +1,6 @@
 #pragma once
 // SE(3): rigid transforms T = [R t; 0 1], x' = R x + t. Tangent vector (omega, upsilon) in R^6,
-// rotation first. Updates are left-multiplied: T <- exp(delta) T (paper/ALGORITHM.md, "Lie
+// rotation first. Updates are left-multiplied: T <- exp(delta) T (doc/algorithm.md, "Lie
 // groups"). Templated on the scalar for Ceres autodiff; SE3 is the double instance.
 
 #include <Eigen/Core>

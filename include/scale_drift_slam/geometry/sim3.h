@@ -1,6 +1,6 @@
 #pragma once
 // Sim(3): similarities S = [s R t; 0 1], x' = s R x + t, with s = exp(sigma) and sigma stored.
-// Tangent vector (omega, sigma, upsilon) in R^7 (paper/ALGORITHM.md, "Lie groups"):
+// Tangent vector (omega, sigma, upsilon) in R^7 (doc/algorithm.md, "Lie groups"):
 //   exp(omega, sigma, upsilon) = [e^sigma exp_SO3(omega), W upsilon; 0 1],
 //   W = integral_0^1 e^(t sigma) exp_SO3(t omega) dt = a I + b [w]x + c [w]x^2.
 // Updates are left-multiplied, S <- exp(delta) S. Templated on the scalar for Ceres autodiff.
@@ -73,7 +73,7 @@ Eigen::Matrix<T, 3, 1> sim3WCoefficients(const Vec3<T>& omega, const T& sigma) {
   } else {
     a = (exp(sigma) - T(1)) / sigma;
   }
-  // The closed forms of paper/ALGORITHM.md; regular at sigma = 0 once theta is not small.
+  // The closed forms of doc/algorithm.md; regular at sigma = 0 once theta is not small.
   const T theta = sqrt(theta_sq);
   const T A = exp(sigma) * sin(theta);
   // 1 - B = 1 - e^sigma cos(theta) = (1 - e^sigma) + 2 e^sigma sin^2(theta/2), free of the
@@ -204,7 +204,7 @@ class Sim3T {
   }
 
   /// The rigid pose with the same rotation and the translation divided by the scale, so that
-  /// the camera centre is unchanged (paper/ALGORITHM.md, "Loop closure correction").
+  /// the camera centre is unchanged (doc/algorithm.md, "Loop closure correction").
   SE3T<T> toSE3() const {
     using std::exp;
     return SE3T<T>(q_, t_ * exp(-sigma_));

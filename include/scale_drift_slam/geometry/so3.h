@@ -1,6 +1,6 @@
 #pragma once
 // Rotations: the SO(3) exponential and logarithm on unit quaternions, templated on the scalar so
-// that Ceres autodiff (ceres::Jet) flows through them. Formulas: paper/ALGORITHM.md, "Lie groups".
+// that Ceres autodiff (ceres::Jet) flows through them. Formulas: doc/algorithm.md, "Lie groups".
 
 #include <cmath>
 

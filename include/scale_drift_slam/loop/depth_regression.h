@@ -1,5 +1,5 @@
 #pragma once
-// Depths for image features that are not map points (paper/ALGORITHM.md, "Loop closure
+// Depths for image features that are not map points (doc/algorithm.md, "Loop closure
 // detection", step 2): the map points a keyframe observes give a sparse depth map of the surface
 // it sees; the depth at another image location is regressed from its k nearest projected points
 // (a locally linear fit of inverse depth, weighted by inverse distance: exact on a plane; the

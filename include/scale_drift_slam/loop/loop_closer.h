@@ -1,5 +1,5 @@
 #pragma once
-// The loop-closure module (paper/ALGORITHM.md, "Loop closure detection"): for every new keyframe,
+// The loop-closure module (doc/algorithm.md, "Loop closure detection"): for every new keyframe,
 // place recognition by appearance (PlaceRecognizer) and, for an accepted candidate, metric
 // verification (loop_verification.h) giving the 7-DoF loop constraint that the mapper's Sim(3)
 // pose graph applies. It also answers relocalisation requests of a lost tracker with the same

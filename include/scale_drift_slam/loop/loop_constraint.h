@@ -1,6 +1,6 @@
 #pragma once
 // The 7-DoF loop constraint between the current keyframe c and a loop keyframe l
-// (paper/ALGORITHM.md, "Loop closure detection", steps 3 and 4):
+// (doc/algorithm.md, "Loop closure detection", steps 3 and 4):
 //   - 6 DoF from 2D-3D correspondences (features of c, points of l's map in l's camera frame):
 //     P3P inside RANSAC (OpenCV solvePnPRansac with SOLVEPNP_AP3P: 3 points plus a 4th to choose
 //     among the solutions, i.e. the paper's P4P), then a robust refinement (motion-only BA,

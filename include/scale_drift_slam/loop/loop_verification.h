@@ -1,5 +1,5 @@
 #pragma once
-// Metric verification of a place-recognition candidate (paper/ALGORITHM.md, "Loop closure
+// Metric verification of a place-recognition candidate (doc/algorithm.md, "Loop closure
 // detection", steps 1-4), shared by loop closure and relocalisation:
 //   1. the descriptor matches of the geometric check (current keypoint <-> candidate keypoint);
 //   2. each matched candidate keypoint gets a depth by k-nearest-neighbour regression over the

@@ -1,5 +1,5 @@
 #pragma once
-// Applies a solved pose graph to the map (paper/ALGORITHM.md, "Loop closure correction"):
+// Applies a solved pose graph to the map (doc/algorithm.md, "Loop closure correction"):
 //   points:    x' = (S_r^new)^-1 (T_r^old x), r = the point's reference keyframe (the point keeps
 //              its coordinates in that keyframe and moves with it, scale included);
 //   keyframes: T' = S^new as a rigid pose: rotation kept, translation t / s (same camera centre).

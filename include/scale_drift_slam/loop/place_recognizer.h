@@ -1,5 +1,5 @@
 #pragma once
-// Place recognition by appearance (paper/ALGORITHM.md, "Loop closure detection"): a bag of
+// Place recognition by appearance (doc/algorithm.md, "Loop closure detection"): a bag of
 // binary words over the keyframes' ORB descriptors, an inverted index with tf-idf L1 scores
 // normalised by the score against the previous keyframe, islands of neighbouring keyframes,
 // a geometric check against repeated texture, and consistency over consecutive queries

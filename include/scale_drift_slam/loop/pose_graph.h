@@ -1,5 +1,5 @@
 #pragma once
-// The pose graph of loop-closure correction (paper/ALGORITHM.md, "Loop closure correction"):
+// The pose graph of loop-closure correction (doc/algorithm.md, "Loop closure correction"):
 // keyframe poses as vertices, relative constraints as edges, solved with Ceres
 // (Levenberg-Marquardt, sparse Cholesky through SuiteSparse) in one of two modes:
 //   Sim(3): vertices are similarities S_i = S_kf_world, residual r_ij = log_Sim3(S_ij S_j S_i^-1)

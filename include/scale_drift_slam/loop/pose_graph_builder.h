@@ -1,5 +1,5 @@
 #pragma once
-// Builds the loop-closure pose graph from the keyframe map (paper/ALGORITHM.md, "Loop closure
+// Builds the loop-closure pose graph from the keyframe map (doc/algorithm.md, "Loop closure
 // correction"): every keyframe pose T_i becomes a similarity with s = 1; consecutive and
 // co-visible keyframes are joined by relative constraints S_ij = S_i S_j^-1 computed from the
 // current estimates (scale 1); the loop edges, with their measured scales, come from loop

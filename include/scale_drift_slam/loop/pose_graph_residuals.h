@@ -6,7 +6,7 @@
 // Parameter blocks: Sim(3) qx qy qz qw tx ty tz sigma (Sim3::toData), SE(3) qx qy qz qw tx ty tz.
 // Vertex update: x <- exp(delta) x (left-multiplied), delta in R^7 (R^6 for SE(3)).
 //
-// Analytic Jacobians (paper/ALGORITHM.md, "Loop closure correction"): with E = S_ij S_j S_i^-1 and
+// Analytic Jacobians (doc/algorithm.md, "Loop closure correction"): with E = S_ij S_j S_i^-1 and
 // r = log(E), left perturbations give E(d) = exp(Adj(S_ij) d_j - Adj(E) d_i) E to first order,
 // hence  dr/dd_j = Jl(r)^-1 Adj(S_ij)  and  dr/dd_i = -Jl(r)^-1 Adj(E)  (geometry/lie_jacobians.h).
 // They are handed to Ceres with the "lift" trick: the cost writes dr/d delta into the first

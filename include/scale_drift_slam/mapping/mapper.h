@@ -1,5 +1,5 @@
 #pragma once
-// The back-end's owner of the global map (paper/ALGORITHM.md, "Back-end: sliding-window bundle
+// The back-end's owner of the global map (doc/algorithm.md, "Back-end: sliding-window bundle
 // adjustment" and "Loop closure correction"): takes the tracker's keyframe messages, adds
 // keyframes, new points and their observations to the map, runs the sliding-window BA
 // (window_bundle_adjustment.h) and returns the corrections as a map::MapUpdate for the tracker.

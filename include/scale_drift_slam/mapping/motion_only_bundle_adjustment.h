@@ -1,5 +1,5 @@
 #pragma once
-// Motion-only bundle adjustment (paper/ALGORITHM.md, "Front-end: tracking one frame", step 4):
+// Motion-only bundle adjustment (doc/algorithm.md, "Front-end: tracking one frame", step 4):
 // minimise sum rho(|f (z_k - proj(T x_k))|) over one camera pose T with the points held fixed,
 // Levenberg-Marquardt and the pseudo-Huber kernel rho.
 //

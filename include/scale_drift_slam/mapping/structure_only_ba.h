@@ -1,5 +1,5 @@
 #pragma once
-// Structure-only bundle adjustment (paper/ALGORITHM.md, "Loop closure correction": "afterwards
+// Structure-only bundle adjustment (doc/algorithm.md, "Loop closure correction": "afterwards
 // refine with structure-only BA"): the keyframe poses are held fixed and every point is refined
 // alone, minimising the pseudo-Huber cost of its reprojection errors in pixels,
 //   C(x) = sum_k rho(|F (pi(R_k x + t_k) - z_k)|^2),  rho(s) = 2 b^2 (sqrt(1 + s / b^2) - 1),

@@ -1,5 +1,5 @@
 #pragma once
-// Sliding-window bundle adjustment (paper/ALGORITHM.md, "Back-end: sliding-window bundle
+// Sliding-window bundle adjustment (doc/algorithm.md, "Back-end: sliding-window bundle
 // adjustment"): minimise sum rho(|f (z_ij - proj(T_i x_j))|) over the poses of the newest N
 // keyframes (paper: N = 10) and the points they see, with the two oldest window keyframes fixed
 // (they anchor rotation, translation and scale: the 7-DoF gauge), the pseudo-Huber kernel rho and

@@ -1,5 +1,5 @@
 #pragma once
-// The paper's circle simulation (paper/ALGORITHM.md, "The paper's evidence", Figure 3): a camera
+// The paper's circle simulation (doc/algorithm.md, "The paper's evidence", Figure 3): a camera
 // on a circle of radius 10 m looking outwards at a ring of points, the whole back-end run as
 // visual odometry (sim/simulated_visual_odometry.h: feature filters, keyframe rule, window BA of
 // 10, data association from the simulation), then the loop between the last keyframe and the

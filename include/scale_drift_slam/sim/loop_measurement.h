@@ -2,7 +2,7 @@
 // Loop constraints of a simulated visual-odometry run, measured from the observations (never from
 // the truth): the simulation gives the data association (which old map point a feature of the
 // current keyframe images); the constraint itself comes from loop::estimateLoopConstraint on the
-// estimated map, exactly as with real features (paper/ALGORITHM.md, "Loop closure detection").
+// estimated map, exactly as with real features (doc/algorithm.md, "Loop closure detection").
 // The points of each keyframe are first re-triangulated from the keyframes around it (poses
 // fixed): a sliding-window map keeps refining a point after an old keyframe has left the window,
 // so the map positions drift away from what the old keyframe saw (several pixels), while its

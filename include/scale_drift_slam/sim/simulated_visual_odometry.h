@@ -1,6 +1,6 @@
 #pragma once
 // The paper's back-end run as visual odometry on a simulated world, data association given
-// (paper/ALGORITHM.md, "The paper's evidence": "the full system with feature initialisation and a
+// (doc/algorithm.md, "The paper's evidence": "the full system with feature initialisation and a
 // fixed window BA of 10 keyframes, data association given"). Per frame: a constant-velocity
 // guess, motion-only BA against the local map, inverse-depth filter updates; at keyframes (the
 // keyframe rule): promotion of certain filters (BA against the surrounding keyframes), new

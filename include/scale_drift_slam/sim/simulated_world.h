@@ -1,5 +1,5 @@
 #pragma once
-// The worlds of the paper's simulations (paper/ALGORITHM.md, "The paper's evidence"): 3D points
+// The worlds of the paper's simulations (doc/algorithm.md, "The paper's evidence"): 3D points
 // and a true camera trajectory, observed through a pinhole camera with Gaussian pixel noise.
 // Data association is given: every measurement carries the id of the point it images.
 //   - circle: 720 poses on a circle of radius 10 m looking outwards; 5000 points on a ring of

@@ -1,6 +1,6 @@
 #pragma once
 // Loop-closure correction of a finished simulated visual-odometry run, Sim(3) against SE(3)
-// (paper/ALGORITHM.md, "Loop closure correction" and "The paper's evidence"). The pose graph is
+// (doc/algorithm.md, "Loop closure correction" and "The paper's evidence"). The pose graph is
 // built from the VO's keyframe map: every keyframe a vertex (scale 1), consecutive edges
 // S_ij = T_i T_j^-1, optionally co-visibility edges, and the loop edges measured from the
 // observations (sim/loop_measurement.h); the first keyframe is fixed. The same graph is solved

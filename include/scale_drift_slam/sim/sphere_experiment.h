@@ -1,5 +1,5 @@
 #pragma once
-// The paper's multi-loop simulation (paper/ALGORITHM.md, "The paper's evidence"): an aircraft
+// The paper's multi-loop simulation (doc/algorithm.md, "The paper's evidence"): an aircraft
 // flies great circles over a sphere of points with a downward camera (sim/simulated_world.h), the
 // back-end runs as visual odometry, the loops are detected from the simulated data association
 // and measured from the observations (sim/loop_measurement.h), and all of them are corrected at

@@ -1,5 +1,5 @@
 #pragma once
-// Active search for map points in a new frame (paper/ALGORITHM.md, "Front-end: tracking one
+// Active search for map points in a new frame (doc/algorithm.md, "Front-end: tracking one
 // frame", step 3): predict each point's pixel from the prior pose T^(0), bound the search region
 // by the innovation covariance Sigma_z = J Sigma_Delta J^T + sigma^2 I (J = d pixel / d pose,
 // Sigma_Delta the prior's uncertainty), warp the point's template from its reference keyframe

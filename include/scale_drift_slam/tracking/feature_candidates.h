@@ -1,6 +1,6 @@
 #pragma once
 // New features between their birth at a keyframe and their promotion to map points
-// (paper/ALGORITHM.md, "Front-end: feature initialisation with inverse-depth information
+// (doc/algorithm.md, "Front-end: feature initialisation with inverse-depth information
 // filters"): FAST corners spread by the quadtree at each keyframe, each with its own
 // InverseDepthFilter (tracking/inverse_depth_filter.h), followed frame to frame by the motion
 // prior's optical flow and updated on frames with enough parallax; at each later keyframe the

@@ -1,5 +1,5 @@
 #pragma once
-// FAST corners (OpenCV) spread evenly over the image by a quadtree (paper/ALGORITHM.md, "feature
+// FAST corners (OpenCV) spread evenly over the image by a quadtree (doc/algorithm.md, "feature
 // initialisation": candidates "spread evenly over the image with a quadtree"), and a bucket grid
 // over the corners of a frame so that active search can ask for the corners inside a region.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Feature initialisation with inverse-depth information filters (paper/ALGORITHM.md, "Front-end:
+// Feature initialisation with inverse-depth information filters (doc/algorithm.md, "Front-end:
 // feature initialisation with inverse-depth information filters", after Eade's framework).
 //
 // One filter per new feature, independent of the others given the (well optimised) current pose.
@@ -103,7 +103,7 @@ struct PromotionResult {
   std::string reason;             ///< Why it was rejected (empty when accepted).
 };
 
-/// The promotion rule (paper/ALGORITHM.md, "Front-end: keyframe dropping"): a certain filter's
+/// The promotion rule (doc/algorithm.md, "Front-end: keyframe dropping"): a certain filter's
 /// point is bundle adjusted (point only, LM from the filter's estimate) against a few (about
 /// three) surrounding keyframes and rejected if it reprojects with more than
 /// max_promotion_error_px in any of them, or lands behind one. Needs >= 2 views.

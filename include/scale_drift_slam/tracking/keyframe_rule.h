@@ -1,5 +1,5 @@
 #pragma once
-// The keyframe rule (paper/ALGORITHM.md, "Front-end: keyframe dropping"): drop a new keyframe as
+// The keyframe rule (doc/algorithm.md, "Front-end: keyframe dropping"): drop a new keyframe as
 // soon as the distance from the current camera to the closest keyframe exceeds a threshold. The
 // map's scale drifts, so the threshold is a fraction of the scene depth (the median depth of the
 // points the camera tracks), not a fixed distance. Our addition for weakly textured scenes and

@@ -1,5 +1,5 @@
 #pragma once
-// Automatic map initialisation from the first frames of a sequence (paper/ALGORITHM.md,
+// Automatic map initialisation from the first frames of a sequence (doc/algorithm.md,
 // "Front-end"): corners of a reference frame are tracked frame to frame with pyramidal
 // Lucas-Kanade; once they have moved enough, reconstructTwoView (two_view_reconstruction.h)
 // tries to build the initial map. A refusal (too little parallax, pure rotation, ambiguity) just

@@ -1,5 +1,5 @@
 #pragma once
-// The initial pose guess of a frame (paper/ALGORITHM.md, "Front-end: tracking one frame", step
+// The initial pose guess of a frame (doc/algorithm.md, "Front-end: tracking one frame", step
 // 1): optical flow carries the previous frame's matched map points into the current image, and a
 // motion-only bundle adjustment on those 2D-3D pairs gives T_i^(0) = Delta T_{i-1} together with
 // its uncertainty Sigma_Delta = sigma_flow^2 (J^T J)^-1 (plus a floor), which bounds the active

@@ -1,6 +1,6 @@
 #pragma once
 // Optical flow from the previous frame to the current one, the source of the motion prior
-// (paper/ALGORITHM.md, "Front-end: tracking one frame", step 1: the paper used dense variational
+// (doc/algorithm.md, "Front-end: tracking one frame", step 1: the paper used dense variational
 // flow on a GPU). Two methods behind one call, chosen by accuracy per millisecond
 // (doc/frontend.md, bench_motion_prior): pyramidal Lucas-Kanade at the given points (default)
 // and OpenCV's dense DIS flow sampled at the points. Not thread-safe (DIS keeps state); one per

@@ -1,5 +1,5 @@
 #pragma once
-// The front-end (paper/ALGORITHM.md, "Front-end"): turns frames into camera poses and keyframes.
+// The front-end (doc/algorithm.md, "Front-end"): turns frames into camera poses and keyframes.
 // Per frame: grey conversion and pyramid, then either map initialisation (MapInitializer) or
 // tracking: motion prior from optical flow, active search for the local map points, motion-only
 // BA with the pseudo-Huber kernel, a quality verdict (good / weak / lost), the inverse-depth

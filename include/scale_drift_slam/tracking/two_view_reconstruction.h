@@ -1,5 +1,5 @@
 #pragma once
-// Map initialisation from two views (paper/ALGORITHM.md, "Front-end"; the paper leaves the
+// Map initialisation from two views (doc/algorithm.md, "Front-end"; the paper leaves the
 // method open): fit a homography and an essential
 // matrix to the correspondences (OpenCV RANSAC), select one by Torr's GRIC (which weighs the fit
 // against the model's complexity; ORB-SLAM's score ratio favours the 5-point essential matrix even
