@@ -4,7 +4,7 @@
 // everything; the ground truth is the camera pose, so the 2 cm facet sagitta costs no accuracy).
 // Orbit: altitude 4 m, 4.5 m/s, on a great circle tilted 25 degrees from the equator whose plane
 // precesses 60 degrees about z per revolution, so every loop crosses the earlier ground tracks:
-// three revolutions, 50.3 s, 1508 frames at 30 Hz.
+// three revolutions, 50.3 s, 1507 frames at 30 Hz.
 
 #include <cmath>
 
