@@ -25,11 +25,11 @@ std::string LoopCorrectionStatistics::describe() const {
   if (!applied) return loop + " not applied: " + reason;
   std::snprintf(text, sizeof(text),
                 " corrected: %s graph of %zu keyframes (%zu co-visibility, %zu loop edges), %d "
-                "iterations; times: build %.1f ms, solve %.1f ms, map %.1f ms, structure-only "
+                "iterations%s; times: build %.1f ms, solve %.1f ms, map %.1f ms, structure-only "
                 "BA %.1f ms, total %.1f ms; scale at the current keyframe %.4f",
                 loop::toString(mode).c_str(), vertices, covisibility_edges, loop_edges,
-                graph_iterations, build_ms, graph_ms, correction_ms, structure_ms, total_ms,
-                current_correction_scale);
+                graph_iterations, graph_converged ? "" : " (not converged)", build_ms, graph_ms,
+                correction_ms, structure_ms, total_ms, current_correction_scale);
   return loop + text;
 }
 
@@ -101,20 +101,24 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   edge.S_from_to = constraint.S_current_loop;
   edge.information *= p.loop_edge_weight;
   edge.kind = loop::EdgeKind::kLoop;
-  loop_edges_.push_back(edge);
+  // The earlier loops and this one; kept for later graphs only once this correction succeeded
+  // (a graph that cannot be built or solved throws and must not poison the next loops).
+  std::vector<loop::PoseGraphEdge> loop_edges = loop_edges_;
+  loop_edges.push_back(edge);
 
   // The graph over all keyframes, the oldest fixed (it defines the world frame).
   loop::PoseGraphBuilderOptions builder;
   builder.min_shared_points = p.covisibility_min_shared_points;
   builder.max_covisibility_edges_per_keyframe = p.covisibility_max_edges;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
-  const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges_, {oldest}, builder);
+  const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges, {oldest}, builder);
   stats.build_ms = msSince(start);
   stats.vertices = graph.vertices().size();
   stats.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
   stats.covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
   const loop::PoseGraphResult solved = graph.optimize(p.graph);
   stats.graph_iterations = solved.iterations;
+  stats.graph_converged = solved.converged;
   stats.graph_initial_chi2 = solved.initial_chi2;
   stats.graph_final_chi2 = solved.final_chi2;
   stats.graph_ms = 1e3 * solved.time_s;
@@ -125,6 +129,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
         id, S_kf_world.inverse() * geometry::Sim3(map_.keyframe(id).T_kf_world));
   }
   update.S_new_old = update.keyframe_corrections.back().second;  // the newest keyframe's
+  loop_edges_ = std::move(loop_edges);
   for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
     update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
   stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();

@@ -83,7 +83,8 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
       mapper_inbox_.push(message);
       loop_inbox_.push(message);
     }
-    if (result.relocalisation_request) loop_inbox_.push(*result.relocalisation_request);
+    // Ahead of the keyframes waiting there, as the ROS tracking node's request overtakes them.
+    if (result.relocalisation_request) loop_inbox_.pushUrgent(*result.relocalisation_request);
   }
   if (!params_.mapping_thread) {
     runInline();

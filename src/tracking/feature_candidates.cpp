@@ -36,6 +36,18 @@ int FeatureCandidates::update(const std::vector<cv::Point2f>& tracked,
                               const std::vector<unsigned char>& ok,
                               const geometry::SE3& T_cur_world,
                               const geometry::CameraModel& camera) {
+  return move(tracked, ok, &T_cur_world, camera);
+}
+
+void FeatureCandidates::follow(const std::vector<cv::Point2f>& tracked,
+                               const std::vector<unsigned char>& ok,
+                               const geometry::CameraModel& camera) {
+  move(tracked, ok, nullptr, camera);
+}
+
+int FeatureCandidates::move(const std::vector<cv::Point2f>& tracked,
+                            const std::vector<unsigned char>& ok, const geometry::SE3* T_cur_world,
+                            const geometry::CameraModel& camera) {
   int updated = 0;
   std::size_t kept = 0;
   for (std::size_t i = 0; i < candidates_.size(); ++i) {
@@ -43,11 +55,13 @@ int FeatureCandidates::update(const std::vector<cv::Point2f>& tracked,
     if (i >= ok.size() || !ok[i]) continue;
     c.px = Eigen::Vector2d(tracked[i].x, tracked[i].y);
     c.xy = camera.undistortToNormalized(c.px);
-    const InverseDepthFilter::Update result = c.filter.update(T_cur_world, c.xy);
-    if (result == InverseDepthFilter::Update::kUpdated) ++updated;
-    if (result == InverseDepthFilter::Update::kRejected &&
-        ++c.rejections >= params_.max_rejections) {
-      continue;
+    if (T_cur_world) {
+      const InverseDepthFilter::Update result = c.filter.update(*T_cur_world, c.xy);
+      if (result == InverseDepthFilter::Update::kUpdated) ++updated;
+      if (result == InverseDepthFilter::Update::kRejected &&
+          ++c.rejections >= params_.max_rejections) {
+        continue;
+      }
     }
     if (kept != i) candidates_[kept] = std::move(c);
     ++kept;

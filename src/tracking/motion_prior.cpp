@@ -136,8 +136,12 @@ std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
         {seeds[carried.seed[i]].p_world,
          camera.undistortToNormalized(Eigen::Vector2d(carried.px[i].x, carried.px[i].y))});
   }
-  const mapping::MotionOnlyResult result =
-      mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+  mapping::MotionOnlyResult result;
+  try {
+    result = mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+  } catch (const std::invalid_argument&) {  // e.g. too few points in front of the camera
+    return std::nullopt;
+  }
   Carried inliers;
   inliers.T_cam_world = result.T_cam_world;
   for (std::size_t i = 0; i < carried.px.size(); ++i) {

@@ -133,9 +133,12 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   } catch (const cv::Exception& e) {
     // An image OpenCV cannot process must not end the run: report it, keep the state (and the
     // loop correction to report, which was taken from pending_loop_correction_ already).
+    // Keyframes already made stay reported: the map holds them and the mapper must get them.
     const std::optional<geometry::Sim3> loop_correction = result.loop_correction;
+    std::vector<map::KeyframeMessage> keyframes = std::move(result.keyframes);
     result = FrameResult{};
     result.loop_correction = loop_correction;
+    result.keyframes = std::move(keyframes);
     result.timestamp = timestamp;
     result.rejected = true;
     result.message = std::string("frame rejected: OpenCV failed: ") + e.what();
@@ -234,6 +237,7 @@ bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
         {ids[carried->seed[i]], px, camera_->undistortToNormalized(px)});
   }
   previous_image_ = pending.frames.back();
+  candidates_.clear();  // their pixels are in an older frame; the next keyframe spawns new ones
   T_previous_world_ = T_before_previous_world_ = carried->T_cam_world;
   last_scene_depth_ = sceneDepth(carried->T_cam_world);
   resume_from_relocalisation_ = true;

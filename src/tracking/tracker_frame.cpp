@@ -38,20 +38,24 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   resume_from_relocalisation_ = false;
   if (result->num_inliers < params_.min_inliers) {
     // Lost: say so, keep the last pose, add no keyframe. The filters cannot be updated without
-    // a pose; they keep their last pixels.
+    // a pose, but their pixels follow the flow into this image (the next flow starts from it).
+    candidates_.follow(candidate_px, candidate_ok, *camera_);
     state_ = TrackingState::kLost;
     previous_measurements_.clear();
     result->message = "lost: " + std::to_string(result->num_inliers) + " inliers of " +
                       std::to_string(result->num_found) + " matches";
     return;
   }
-  if (state_ == TrackingState::kLost) {
+  const bool was_lost = state_ == TrackingState::kLost;
+  if (was_lost) {
     result->relocalised = from_relocalisation;
     result->message = from_relocalisation ? "relocalised" : "recovered";
   }
   state_ =
       result->num_inliers >= params_.good_inliers ? TrackingState::kGood : TrackingState::kWeak;
-  T_before_previous_world_ = T_previous_world_;
+  // The constant-velocity model: after recovering by itself the last pose is frames old (no
+  // velocity to keep); after relocalisation the carried pose is the previous frame's.
+  T_before_previous_world_ = was_lost && !from_relocalisation ? T_cam_world : T_previous_world_;
   T_previous_world_ = T_cam_world;
   previous_measurements_ = inliers;
   last_scene_depth_ = sceneDepth(T_cam_world);

@@ -26,7 +26,9 @@ void TrackingMap::addObservation(map::KeyframeId keyframe, map::PointId point) {
 }
 
 void TrackingMap::linkKeyframes(map::KeyframeId a, map::KeyframeId b) {
-  links_[a].push_back(b);
+  std::vector<map::KeyframeId>& from_a = links_[a];
+  if (std::find(from_a.begin(), from_a.end(), b) != from_a.end()) return;  // linked already
+  from_a.push_back(b);
   links_[b].push_back(a);
 }
 

@@ -2,9 +2,12 @@
 // (sim/drifting_pose_graph.h: a circle as in the paper's simulation), with points anchored to the
 // keyframes: a Sim(3) correction brings keyframes and points back to the truth, an SE(3) one
 // cannot; a keyframe made before the correction is brought into the corrected frame when it
-// arrives; a constraint naming an unknown keyframe is refused with the reason.
+// arrives; a constraint naming an unknown keyframe is refused with the reason; one that breaks
+// the graph (a NaN) throws and leaves the next loops intact.
 
+#include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
@@ -141,6 +144,29 @@ TEST(LoopCorrection, RefusesAConstraintOnAnUnknownKeyframe) {
   EXPECT_NE(stats.reason.find("57"), std::string::npos);
   EXPECT_FALSE(update.isLoopCorrection());
   EXPECT_TRUE(mapper.loopEdges().empty());
+}
+
+TEST(LoopCorrection, AConstraintThatBreaksTheGraphLeavesLaterLoopsIntact) {
+  const DriftedMap drifted = makeDriftedMap(60, 0.004);
+  MapperParams params;
+  params.run_window_ba = false;
+  Mapper mapper(params, 400.0);
+  for (const map::KeyframeMessage& message : drifted.messages)
+    mapper.addKeyframe(message);
+  loop::LoopConstraint broken = trueLoop(drifted);
+  broken.S_current_loop =
+      geometry::Sim3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(std::nan(""), 0.0, 0.0), 0.0);
+  EXPECT_THROW(mapper.closeLoop(broken), std::invalid_argument);
+  EXPECT_TRUE(mapper.loopEdges().empty());  // not kept for the next graphs
+  LoopCorrectionStatistics stats;
+  const map::MapUpdate update = mapper.closeLoop(trueLoop(drifted), &stats);
+  ASSERT_TRUE(stats.applied) << stats.reason;
+  EXPECT_TRUE(stats.graph_converged);
+  EXPECT_EQ(stats.loop_edges, 1u);
+  EXPECT_EQ(mapper.loopEdges().size(), 1u);
+  EXPECT_TRUE(update.isLoopCorrection());
+  EXPECT_NEAR(stats.current_correction_scale, trueLoop(drifted).scale,
+              0.02 * trueLoop(drifted).scale);
 }
 
 }  // namespace

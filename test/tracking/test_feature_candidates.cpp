@@ -1,8 +1,9 @@
 // New features and the motion prior on rendered views of a textured wall with known geometry:
 // candidates started at a keyframe, carried by the flow and filtered with the true poses, are
-// promoted at a later keyframe onto the wall; the flow-based prior recovers the true motion far
-// better than the constant-velocity guess, and falls back to the guess with a wide uncertainty
-// when there is nothing to flow.
+// promoted at a later keyframe onto the wall, also when some frames in between had no pose (they
+// only follow the flow); the flow-based prior recovers the true motion far better than the
+// constant-velocity guess, and falls back to the guess with a wide uncertainty when there is
+// nothing to flow.
 
 #include <gtest/gtest.h>
 
@@ -65,6 +66,39 @@ TEST(FeatureCandidates, PromotesFilteredFeaturesOntoTheWall) {
     EXPECT_EQ(f.views.back().keyframe_id, 1u);
     on_wall += std::abs(f.p_world.z() - kWallDepth) < 0.03 * kWallDepth;
   }
+  EXPECT_GT(on_wall, 0.95 * promoted.size());
+}
+
+TEST(FeatureCandidates, FollowTheFlowThroughFramesWithoutAPose) {
+  // Frames 5-8 have no pose (tracking lost): the candidates only follow the flow, so that the
+  // flow of frame 9 starts where they are; filtered again from frame 9 on, they still land on
+  // the wall.
+  const auto cam = camera();
+  FeatureCandidates candidates(FeatureCandidateParams{}, FeatureDetectionParams{}, 500.0);
+  ImagePyramid previous = render(0);
+  ASSERT_GT(candidates.spawn(0, pose(0), previous, {}, kWallDepth, *cam), 100);
+  OpticalFlow flow(OpticalFlowParams{});
+  for (int k = 1; k <= 12; ++k) {
+    const ImagePyramid current = render(k);
+    std::vector<cv::Point2f> tracked;
+    std::vector<unsigned char> ok;
+    flow.track(previous, current, candidates.pixels(), &tracked, &ok);
+    if (k >= 5 && k <= 8) {
+      candidates.follow(tracked, ok, *cam);
+      std::vector<cv::Point2f> kept;
+      for (std::size_t i = 0; i < tracked.size(); ++i)
+        if (ok[i]) kept.push_back(tracked[i]);
+      EXPECT_EQ(candidates.pixels(), kept);
+    } else {
+      candidates.update(tracked, ok, pose(k), *cam);
+    }
+    previous = current;
+  }
+  const std::vector<PromotedFeature> promoted = candidates.promote(1, pose(12));
+  ASSERT_GT(promoted.size(), 80u);
+  int on_wall = 0;
+  for (const PromotedFeature& f : promoted)
+    on_wall += std::abs(f.p_world.z() - kWallDepth) < 0.03 * kWallDepth;
   EXPECT_GT(on_wall, 0.95 * promoted.size());
 }
 

@@ -58,6 +58,7 @@ struct LoopCorrectionStatistics {
   loop::LoopConstraint constraint;
   std::size_t vertices = 0, loop_edges = 0, covisibility_edges = 0;
   int graph_iterations = 0;
+  bool graph_converged = false;  ///< False: LM stopped at its iteration limit (still applied).
   double graph_initial_chi2 = 0.0, graph_final_chi2 = 0.0;
   /// Scale of the correction at the current keyframe (1 for SE(3)).
   double current_correction_scale = 1.0;

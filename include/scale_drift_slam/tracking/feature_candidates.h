@@ -50,6 +50,12 @@ class FeatureCandidates {
   /// Candidates lost by the flow or rejected too often are dropped. Returns the number updated.
   int update(const std::vector<cv::Point2f>& tracked, const std::vector<unsigned char>& ok,
              const geometry::SE3& T_cur_world, const geometry::CameraModel& camera);
+  /// The same on a frame without a pose (tracking lost): the candidates only follow the flow, so
+  /// that their pixels stay in the latest image; those lost by the flow are dropped.
+  void follow(const std::vector<cv::Point2f>& tracked, const std::vector<unsigned char>& ok,
+              const geometry::CameraModel& camera);
+  /// Drops every candidate (their pixels belong to frames the tracker no longer follows).
+  void clear() { candidates_.clear(); }
 
   /// At a new keyframe: records the view of every candidate, promotes the certain ones that
   /// pass the promotion rule (removing them), and returns those.
@@ -75,6 +81,11 @@ class FeatureCandidates {
     std::vector<PromotionView> views;              ///< Origin first.
     int rejections = 0;
   };
+
+  /// update() and follow(): moves the candidates to the tracked pixels and, given a pose, updates
+  /// their filters.
+  int move(const std::vector<cv::Point2f>& tracked, const std::vector<unsigned char>& ok,
+           const geometry::SE3* T_cur_world, const geometry::CameraModel& camera);
 
   FeatureCandidateParams params_;
   FeatureDetectionParams detection_;
