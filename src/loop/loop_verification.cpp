@@ -101,7 +101,7 @@ PoseSolution solvePose(const VerificationView& current, const VerificationView& 
   validateView(current, "current");
   validateView(candidate, "candidate");
   const geometry::CameraCalibration& calibration = camera.calibration();
-  const double focal = 0.5 * (std::abs(calibration.fx) + std::abs(calibration.fy));
+  const double focal = calibration.meanFocalLength();
   PoseSolution solution;
   LoopVerification& v = solution.verification;
   v.descriptor_matches = static_cast<int>(matches.size());
@@ -194,7 +194,7 @@ LoopVerification verifyLoop(const VerificationView& current, const VerificationV
   if (!v.success) return v;
   // Step 4: the current keyframe's own depths for the inlier matches: 3D-3D pairs.
   const geometry::CameraCalibration& calibration = camera.calibration();
-  const double focal = 0.5 * (std::abs(calibration.fx) + std::abs(calibration.fy));
+  const double focal = calibration.meanFocalLength();
   const DepthRegressor current_depths = regressorOf(current, focal, params.depth);
   std::vector<Match3D3D> pairs;
   for (std::size_t i = 0; i < solution.input.matches.size(); ++i) {

@@ -15,7 +15,7 @@ namespace {
 
 double focalOf(const std::shared_ptr<const geometry::CameraModel>& camera) {
   if (!camera) throw std::invalid_argument("the SLAM needs a camera model");
-  return 0.5 * (camera->calibration().fx + camera->calibration().fy);
+  return camera->calibration().meanFocalLength();
 }
 
 double msSince(std::chrono::steady_clock::time_point start) {

@@ -68,8 +68,7 @@ class MappingNode {
       if (!mapper_) {
         const geometry::CameraCalibration camera =
             ros_conversions::calibrationFromCameraInfo(msg->camera);
-        mapper_ =
-            std::make_unique<mapping::Mapper>(config_.slam.mapper, 0.5 * (camera.fx + camera.fy));
+        mapper_ = std::make_unique<mapping::Mapper>(config_.slam.mapper, camera.meanFocalLength());
         ROS_INFO("new map from keyframe %u; camera %s", msg->id, camera.describe().c_str());
       }
       if (mapper_->map().hasKeyframe(msg->id)) {

@@ -30,16 +30,16 @@ void ActiveSearchParams::validate() const {
 bool PointAppearance::cut(const ImagePyramid& image, const Eigen::Vector2d& px) {
   const int r = kPatchRadius;
   for (int level = 0; level < 2; ++level) {
-    if (level >= image.numLevels()) return false;
-    const cv::Mat& source = image.levels[level];
+    const cv::Mat* source = level < image.numLevels() ? &image.levels[level] : nullptr;
     const double s = level == 0 ? 1.0 : 0.5;
     const int x0 = static_cast<int>(std::lround(px.x() * s)) - r;
     const int y0 = static_cast<int>(std::lround(px.y() * s)) - r;
-    if (x0 < 0 || y0 < 0 || x0 + 2 * r + 1 > source.cols || y0 + 2 * r + 1 > source.rows) {
-      patch[0].release();
+    if (!source || x0 < 0 || y0 < 0 || x0 + 2 * r + 1 > source->cols ||
+        y0 + 2 * r + 1 > source->rows) {
+      patch[0].release();  // empty(): no half-cut appearance
       return false;
     }
-    patch[level] = source(cv::Rect(x0, y0, 2 * r + 1, 2 * r + 1)).clone();
+    patch[level] = (*source)(cv::Rect(x0, y0, 2 * r + 1, 2 * r + 1)).clone();
   }
   px_reference = px;
   return true;

@@ -88,9 +88,10 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const Image
   previous_image_ = image;
   ++frames_since_reference_;
   if (static_cast<int>(kept) < params_.min_tracks || frames_since_reference_ > params_.max_frames) {
-    status_ = "restarting: " + std::to_string(kept) + " tracks after " +
-              std::to_string(frames_since_reference_) + " frames";
+    const std::string why = "restarting (" + std::to_string(kept) + " tracks after " +
+                            std::to_string(frames_since_reference_) + " frames): ";
     startReference(timestamp, image);
+    status_ = why + status_;
     return std::nullopt;
   }
   std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
@@ -106,7 +107,7 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const Image
     map.xy_first.push_back(camera_->undistortToNormalized(map.px_first.back()));
     map.xy_second.push_back(camera_->undistortToNormalized(map.px_second.back()));
   }
-  const double focal = 0.5 * (camera_->calibration().fx + camera_->calibration().fy);
+  const double focal = camera_->calibration().meanFocalLength();
   TwoViewResult result = reconstructTwoView(map.xy_first, map.xy_second, focal, params_.two_view);
   if (!result.success) {
     status_ = "two-view reconstruction refused: " + result.reason;

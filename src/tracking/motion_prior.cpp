@@ -68,7 +68,7 @@ MotionPrior MotionPriorEstimator::estimate(
 
   mapping::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
-  input.focal_length_px = 0.5 * (camera.calibration().fx + camera.calibration().fy);
+  input.focal_length_px = camera.calibration().meanFocalLength();
   for (std::size_t i = 0; i < picked.size(); ++i) {
     if (!ok[i]) continue;
     input.observations.push_back(
@@ -130,7 +130,7 @@ std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
   if (frames.size() <= 1) return carried;
   mapping::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
-  input.focal_length_px = 0.5 * (camera.calibration().fx + camera.calibration().fy);
+  input.focal_length_px = camera.calibration().meanFocalLength();
   for (std::size_t i = 0; i < carried.px.size(); ++i) {
     input.observations.push_back(
         {seeds[carried.seed[i]].p_world,

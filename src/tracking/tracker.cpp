@@ -89,7 +89,7 @@ std::string trackingStateName(TrackingState state) {
 Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params)
     : camera_(std::move(camera)),
       params_(params),
-      focal_(camera_ ? 0.5 * (camera_->calibration().fx + camera_->calibration().fy) : 0.0),
+      focal_(camera_ ? camera_->calibration().meanFocalLength() : 0.0),
       initializer_(camera_, params.initializer, params.features, params.motion_prior.flow),
       motion_prior_(params.motion_prior, params.motion_ba),
       candidates_(params.candidates, params.features, focal_) {

@@ -37,6 +37,9 @@ struct CameraCalibration {
   void validate() const;
   /// One line for logs: "plumb_bob 640x480 fx=.. fy=.. cx=.. cy=.. d=[..]".
   std::string describe() const;
+  /// (fx + fy) / 2: pixels per unit of normalised image coordinates, for error thresholds and
+  /// robust kernels given in pixels.
+  double meanFocalLength() const { return 0.5 * (fx + fy); }
 };
 
 }  // namespace scale_drift_slam::geometry

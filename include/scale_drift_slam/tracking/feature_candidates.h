@@ -26,7 +26,7 @@ struct FeatureCandidateParams {
   InverseDepthFilterParams filter;
   int max_candidates = 300;    ///< Candidates alive at once.
   int new_per_keyframe = 150;  ///< New candidates started at a keyframe (at most).
-  int max_rejections = 2;      ///< Drop a candidate after this many rejected updates.
+  int max_rejections = 2;      ///< Drop a candidate after this many rejected updates or promotions.
   int max_views = 4;           ///< Keyframe views kept for the promotion BA.
   void validate() const;
 };
