@@ -54,12 +54,13 @@ class TrackingMap {
   /// The local map (ids, each once): the points of the `num_recent` newest keyframes and of the
   /// `num_nearest` keyframes closest to `camera_centre` among the neighbourhood of the tracked
   /// region (the newest ones may be among them; then fewer keyframes are searched: keeping the
-  /// two sets apart searched more but lost 5 of the 6 loops on sphere_flyover). The region is the newest keyframes and those observing `tracked` (the points found
-  /// in the previous frame); its neighbourhood is what the graph of co-visibility (keyframes
-  /// sharing at least `min_shared` points) and loop links reaches from it in two steps. So
-  /// points of a distant part of the map are not searched just because the drifted pose estimate
-  /// comes near it: a large loop is closed by loop closure (Sim(3), scale included), not by
-  /// silently re-finding old points in a drifted frame. `frame` stamps the selection.
+  /// two sets apart searched more but lost 5 of the 6 loops on sphere_flyover). The region is the
+  /// newest keyframes and those observing `tracked` (the points found in the previous frame); its
+  /// neighbourhood is what the graph of co-visibility (keyframes sharing at least `min_shared`
+  /// points) and loop links reaches from it in two steps. So points of a distant part of the map
+  /// are not searched just because the drifted pose estimate comes near it: a large loop is closed
+  /// by loop closure (Sim(3), scale included), not by silently re-finding old points in a drifted
+  /// frame. `frame` stamps the selection.
   std::vector<map::PointId> localPoints(const Eigen::Vector3d& camera_centre, int num_recent,
                                         int num_nearest, const std::vector<map::PointId>& tracked,
                                         int min_shared, std::uint64_t frame);
