@@ -29,18 +29,7 @@ bool applyMapUpdate(const MapUpdate& update, Map& map, std::uint64_t* applied_ve
     if (update.map_version < *applied_version) return false;
     *applied_version = update.map_version;
   }
-  if (update.S_new_old) {
-    for (auto& [id, keyframe] : map.keyframes())
-      keyframe.T_kf_world = correctPose(keyframe.T_kf_world, *update.S_new_old);
-    for (auto& [id, point] : map.points())
-      point.p_world = *update.S_new_old * point.p_world;
-  }
-  for (const auto& [id, T_kf_world] : update.keyframe_poses) {
-    if (map.hasKeyframe(id)) map.keyframe(id).T_kf_world = T_kf_world;
-  }
-  for (const auto& [id, p_world] : update.point_positions) {
-    if (map.hasPoint(id)) map.point(id).p_world = p_world;
-  }
+  moveKeyframesAndPoints(update, map.keyframes(), map.points());
   for (const PointId id : update.removed_points)
     map.removePoint(id);
   map.bumpVersion();

@@ -47,21 +47,7 @@ void TrackingMap::linkPoint(map::KeyframeId keyframe, map::PointId point) {
 bool TrackingMap::apply(const map::MapUpdate& update) {
   if (update.map_version < version_) return false;
   version_ = update.map_version;
-  if (update.S_new_old) {
-    const geometry::Sim3& S = *update.S_new_old;
-    for (auto& [id, keyframe] : keyframes_)
-      keyframe.T_kf_world = map::correctPose(keyframe.T_kf_world, S);
-    for (auto& [id, point] : points_)
-      point.p_world = S * point.p_world;
-  }
-  for (const auto& [id, T_kf_world] : update.keyframe_poses) {
-    const auto it = keyframes_.find(id);
-    if (it != keyframes_.end()) it->second.T_kf_world = T_kf_world;
-  }
-  for (const auto& [id, p_world] : update.point_positions) {
-    const auto it = points_.find(id);
-    if (it != points_.end()) it->second.p_world = p_world;
-  }
+  map::moveKeyframesAndPoints(update, keyframes_, points_);
   for (const map::PointId id : update.removed_points)
     points_.erase(id);
   for (const auto& [a, b] : update.loop_links) {

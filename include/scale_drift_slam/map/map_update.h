@@ -30,6 +30,28 @@ geometry::SE3 correctPose(const geometry::SE3& T_cam_world, const geometry::Sim3
 /// keyframe is already in the map.
 void addKeyframeMessage(const KeyframeMessage& message, Map& map);
 
+/// Moves keyframes and points as `update` says: the loop correction S_new_old (if any) on every
+/// one, then the listed poses and positions (ids not held are skipped). Shared by the global map
+/// (applyMapUpdate) and the tracker's copy (tracking::TrackingMap::apply): `keyframes` and
+/// `points` map ids to objects with a `T_kf_world` and a `p_world`.
+template <typename KeyframesById, typename PointsById>
+void moveKeyframesAndPoints(const MapUpdate& update, KeyframesById& keyframes, PointsById& points) {
+  if (update.S_new_old) {
+    for (auto& entry : keyframes)
+      entry.second.T_kf_world = correctPose(entry.second.T_kf_world, *update.S_new_old);
+    for (auto& entry : points)
+      entry.second.p_world = *update.S_new_old * entry.second.p_world;
+  }
+  for (const auto& [id, T_kf_world] : update.keyframe_poses) {
+    const auto it = keyframes.find(id);
+    if (it != keyframes.end()) it->second.T_kf_world = T_kf_world;
+  }
+  for (const auto& [id, p_world] : update.point_positions) {
+    const auto it = points.find(id);
+    if (it != points.end()) it->second.p_world = p_world;
+  }
+}
+
 /// Applies `update` to `map`: the loop correction S_new_old (if any) to every keyframe and point,
 /// then the listed poses and positions of known ids, then the removals. Updates whose version is
 /// below `*applied_version` are ignored (returns false); otherwise *applied_version becomes the
