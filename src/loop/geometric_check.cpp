@@ -7,6 +7,8 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "scale_drift_slam/common/statistics.h"
+
 namespace scale_drift_slam::loop {
 namespace {
 
@@ -114,8 +116,7 @@ double scaleChange(const KeyframeAppearance& query, const KeyframeAppearance& ca
     ratios.push_back(std::log(d_query / d_candidate));
   }
   if (ratios.size() < 2) return 1.0;
-  std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
-  return std::exp(std::abs(ratios[ratios.size() / 2]));
+  return std::exp(std::abs(common::upperMedian(std::move(ratios))));
 }
 
 double gridCoverage(const KeyframeAppearance& appearance, const std::vector<int>& selected,

@@ -1,18 +1,14 @@
 #include "scale_drift_slam/loop/loop_closer.h"
 
-#include <chrono>
 #include <cstdio>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "scale_drift_slam/common/stopwatch.h"
+
 namespace scale_drift_slam::loop {
 namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 std::string format(const char* pattern, double value) {
   char buffer[64];
@@ -128,7 +124,7 @@ LoopDetection LoopCloser::addKeyframe(map::KeyframeMessage message) {
     detection.recognition.skip_reason = "the keyframe carries no image";
     return detection;
   }
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   KeyframeAppearance features = extractor_.extract(message.image, camera_.get());
   if (params_.enabled) {
     detection.recognition =
@@ -136,9 +132,9 @@ LoopDetection LoopCloser::addKeyframe(map::KeyframeMessage message) {
   } else {
     detection.recognition.skip_reason = "loop closure disabled";
   }
-  detection.recognition_ms = msSince(start);
+  detection.recognition_ms = timer.ms();
   if (const LoopCandidate* candidate = detection.recognition.accepted()) {
-    const auto verify_start = std::chrono::steady_clock::now();
+    const common::Stopwatch verify_timer;
     const map::KeyframeId loop_id = candidate->keyframe_id;
     const VerificationView current = viewOf(id, features, message.image);
     const VerificationView loop =
@@ -153,7 +149,7 @@ LoopDetection LoopCloser::addKeyframe(map::KeyframeMessage message) {
       recognizer_.reportLoopRejected(id);
     }
     detection.verification = std::move(verification);
-    detection.verification_ms = msSince(verify_start);
+    detection.verification_ms = verify_timer.ms();
   }
   recognizer_.add(id, message.keyframe.timestamp, std::move(features));
   return detection;

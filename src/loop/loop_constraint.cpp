@@ -7,6 +7,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "scale_drift_slam/common/statistics.h"
+
 namespace scale_drift_slam::loop {
 
 void LoopConstraintParams::validate() const {
@@ -137,9 +139,7 @@ bool estimateLoopScale(const std::vector<Match3D3D>& pairs, const LoopConstraint
     *reason = "only " + std::to_string(constraint->num_scale_pairs) + " usable 3D-3D pairs";
     return false;
   }
-  auto middle = ratios.begin() + ratios.size() / 2;
-  std::nth_element(ratios.begin(), middle, ratios.end());
-  constraint->scale = *middle;
+  constraint->scale = common::upperMedian(std::move(ratios));
   const geometry::SE3& T = constraint->T_current_loop;
   constraint->S_current_loop = geometry::Sim3::fromScale(
       T.rotation(), constraint->scale * T.translation(), constraint->scale);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "scale_drift_slam/common/statistics.h"
 #include "scale_drift_slam/tracking/feature_detection.h"
 
 namespace scale_drift_slam::loop {
@@ -82,8 +83,8 @@ std::vector<tracking::SearchMatch> searchCandidatePoints(const VerificationView&
     depths.push_back(candidate.point_camera[i].z());
   }
   if (points.empty()) return {};
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-  const double translation_sigma = params.search_translation_sigma * depths[depths.size() / 2];
+  const double translation_sigma =
+      params.search_translation_sigma * common::upperMedian(std::move(depths));
   Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Zero();
   Sigma.diagonal().head<3>().setConstant(params.search_rotation_sigma *
                                          params.search_rotation_sigma);

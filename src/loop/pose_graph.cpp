@@ -1,6 +1,5 @@
 #include "scale_drift_slam/loop/pose_graph.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -11,6 +10,7 @@
 
 #include <ceres/ceres.h>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/loop/loop_error_distribution.h"
 #include "scale_drift_slam/loop/pose_graph_residuals.h"
 
@@ -255,7 +255,7 @@ void PoseGraph::checkGauge() const {
 }
 
 PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   options.validate();
   checkGauge();
   const PoseGraphMode mode = options.mode;
@@ -316,7 +316,7 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   result.termination = ceres::TerminationTypeToString(summary.termination_type) +
                        std::string(": ") + summary.message;
-  result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.time_s = timer.seconds();
   return result;
 }
 

@@ -1,23 +1,14 @@
 #include "scale_drift_slam/mapping/mapper.h"
 
-#include <chrono>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/loop/map_correction.h"
 #include "scale_drift_slam/loop/pose_graph_builder.h"
 
 namespace scale_drift_slam::mapping {
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-}  // namespace
-
 std::string LoopCorrectionStatistics::describe() const {
   char text[400];
   const std::string loop =
@@ -82,7 +73,7 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message, BundleStatistic
 
 map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
                                  LoopCorrectionStatistics* statistics) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   LoopCorrectionStatistics stats;
   stats.constraint = constraint;
   stats.mode = params_.loop_correction.graph.mode;
@@ -112,7 +103,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   builder.max_covisibility_edges_per_keyframe = p.covisibility_max_edges;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
   const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges, {oldest}, builder);
-  stats.build_ms = msSince(start);
+  stats.build_ms = timer.ms();
   stats.vertices = graph.vertices().size();
   stats.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
   stats.covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
@@ -133,9 +124,9 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
     update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
   stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();
-  const auto correction_start = std::chrono::steady_clock::now();
+  const common::Stopwatch correction_timer;
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
-  stats.correction_ms = msSince(correction_start);
+  stats.correction_ms = correction_timer.ms();
   const StructureOnlyBAResult structure =
       refineStructure(map_, {}, {focal_length_px_, focal_length_px_}, p.structure);
   stats.structure_ms = 1e3 * structure.time_s;
@@ -150,7 +141,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   update.map_version = map_.version();
   corrections_.record(update);
   stats.applied = true;
-  stats.total_ms = msSince(start);
+  stats.total_ms = timer.ms();
   if (statistics) *statistics = stats;
   return update;
 }

@@ -1,13 +1,14 @@
 #include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
 
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <deque>
 #include <stdexcept>
 
 #include <ceres/ceres.h>
 #include <Eigen/Cholesky>
+
+#include "scale_drift_slam/common/stopwatch.h"
 
 #include "reprojection_cost.h"
 
@@ -156,7 +157,7 @@ geometry::SE3 ceresLm(const MotionOnlyInput& input, const MotionOnlyBundleAdjust
 
 MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
                                                  const MotionOnlyBundleAdjustmentParams& params) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   params.validate();
   input.validate();
   const NormalEquations initial =
@@ -195,8 +196,7 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
     stats.initial_rmse_px = std::sqrt(initial_sq / stats.num_inliers);
     stats.final_rmse_px = std::sqrt(final_sq / stats.num_inliers);
   }
-  stats.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats.time_ms = timer.ms();
   return result;
 }
 

@@ -1,7 +1,8 @@
 #include "scale_drift_slam/mapping/slam_system.h"
 
-#include <chrono>
 #include <utility>
+
+#include "scale_drift_slam/common/stopwatch.h"
 
 namespace scale_drift_slam::mapping {
 
@@ -16,11 +17,6 @@ namespace {
 double focalOf(const std::shared_ptr<const geometry::CameraModel>& camera) {
   if (!camera) throw std::invalid_argument("the SLAM needs a camera model");
   return camera->calibration().meanFocalLength();
-}
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
 }
 
 }  // namespace
@@ -136,12 +132,12 @@ void SlamSystem::handleSafely(Input input) {
 }
 
 void SlamSystem::handle(MapperInput input) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
     map::MapUpdate update = mapper_.addKeyframe(std::move(*message));
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
-      times_.window_ba_ms.push_back(msSince(start));
+      times_.window_ba_ms.push_back(timer.ms());
     }
     publishUpdate(std::move(update));
     return;
@@ -165,7 +161,7 @@ void SlamSystem::handle(MapperInput input) {
 }
 
 void SlamSystem::handle(LoopInput input) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
     const loop::LoopDetection detection = loop_closer_.addKeyframe(std::move(*message));
     {
@@ -190,7 +186,7 @@ void SlamSystem::handle(LoopInput input) {
         loop_closer_.relocalise(std::get<map::RelocalisationRequest>(input));
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
-      times_.relocalisation_ms.push_back(msSince(start));
+      times_.relocalisation_ms.push_back(timer.ms());
       relocalisations_ += answer.success;
     }
     log("relocalisation of frame " + std::to_string(answer.frame_index) + ": " +

@@ -1,10 +1,11 @@
 #include "scale_drift_slam/mapping/structure_only_ba.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "scale_drift_slam/common/stopwatch.h"
 
 namespace scale_drift_slam::mapping {
 namespace {
@@ -297,7 +298,7 @@ void StructureOnlyProblem::validate() const {
 StructureOnlyBAResult refineStructure(StructureOnlyProblem& problem,
                                       const Eigen::Vector2d& focal_length_px,
                                       const StructureOnlyBAOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   options.validate();
   problem.validate();
   checkFocal(focal_length_px);
@@ -330,7 +331,7 @@ StructureOnlyBAResult refineStructure(StructureOnlyProblem& problem,
   result.mean_iterations =
       result.points > 0 ? static_cast<double>(total_iterations) / result.points : 0.0;
   result.after = problemStats(problem, poses, focal);
-  result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.time_s = timer.seconds();
   return result;
 }
 

@@ -2,10 +2,11 @@
 // observations from a map::Map into a StructureOnlyProblem, and writing the result back.
 
 #include <algorithm>
-#include <chrono>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
+
+#include "scale_drift_slam/common/stopwatch.h"
 
 #include "scale_drift_slam/mapping/structure_only_ba.h"
 
@@ -109,7 +110,7 @@ StructureOnlyProblem makeStructureOnlyProblem(const map::Map& map,
 StructureOnlyBAResult refineStructure(map::Map& map, const std::vector<map::PointId>& points,
                                       const Eigen::Vector2d& focal_length_px,
                                       const StructureOnlyBAOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   const std::vector<map::PointId> ids = pointIds(map, points);
   StructureOnlyProblem problem = makeStructureOnlyProblem(map, ids);
   StructureOnlyBAResult result = refineStructure(problem, focal_length_px, options);
@@ -117,7 +118,7 @@ StructureOnlyBAResult refineStructure(map::Map& map, const std::vector<map::Poin
     map.point(ids[i]).p_world = problem.points[i];
   }
   map.bumpVersion();
-  result.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.time_s = timer.seconds();
   return result;
 }
 

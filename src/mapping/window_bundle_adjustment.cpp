@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <deque>
 #include <memory>
@@ -11,6 +10,8 @@
 #include <unordered_map>
 
 #include <ceres/ceres.h>
+
+#include "scale_drift_slam/common/stopwatch.h"
 
 #include "reprojection_cost.h"
 
@@ -132,7 +133,7 @@ double robustCost(const std::vector<double>& errors, double width) {
 
 WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
                                                const WindowBundleAdjustmentParams& params) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   params.validate();
   input.validate();
 
@@ -229,8 +230,7 @@ WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
   result.points = input.points;
   for (std::size_t j = 0; j < points.size(); ++j)
     result.points[j].p_world = points[j];
-  stats.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats.time_ms = timer.ms();
   return result;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "scale_drift_slam/common/statistics.h"
 #include "scale_drift_slam/mapping/structure_only_ba.h"
 
 namespace scale_drift_slam::sim {
@@ -92,8 +93,7 @@ double regressedDepth(const std::unordered_map<int, Eigen::Vector3d>& points,
   std::vector<double> depths;
   for (std::size_t i = 0; i < k; ++i)
     depths.push_back(neighbours[i].second);
-  std::nth_element(depths.begin(), depths.begin() + k / 2, depths.end());
-  return depths[k / 2];
+  return common::upperMedian(std::move(depths));
 }
 
 }  // namespace

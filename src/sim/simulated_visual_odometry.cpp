@@ -1,21 +1,13 @@
 #include "scale_drift_slam/sim/simulated_visual_odometry.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "scale_drift_slam/common/stopwatch.h"
+
 namespace scale_drift_slam::sim {
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-}  // namespace
-
 void SimulatedVoParams::validate() const {
   window.validate();
   motion.validate();
@@ -90,10 +82,10 @@ std::vector<SimulatedVisualOdometry::Tracked> SimulatedVisualOdometry::track(
     ++stats_.lost_frames;
     return tracked;
   }
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   const mapping::MotionOnlyResult result =
       mapping::solveMotionOnlyBundleAdjustment(input, params_.motion);
-  stats_.motion_ba_ms += msSince(start);
+  stats_.motion_ba_ms += timer.ms();
   *pose = result.T_cam_world;
   std::vector<Tracked> inliers;
   for (std::size_t i = 0; i < tracked.size(); ++i) {
@@ -277,13 +269,13 @@ void SimulatedVisualOdometry::startFilters(const std::vector<Measurement>& measu
 
 void SimulatedVisualOdometry::runWindowBundleAdjustment() {
   if (map_.numKeyframes() <= static_cast<std::size_t>(params_.window.num_fixed_keyframes)) return;
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   const mapping::WindowBundleInput input =
       mapping::makeWindowInput(map_, params_.window, camera_.focal_length);
   const mapping::WindowBundleResult result =
       mapping::solveWindowBundleAdjustment(input, params_.window);
   mapping::applyWindowResult(result, map_);
-  stats_.window_ba_ms += msSince(start);
+  stats_.window_ba_ms += timer.ms();
   ++stats_.window_ba_runs;
   // Filters stay attached to their (re-optimised) origin keyframes; the newest frame is the
   // newest keyframe.

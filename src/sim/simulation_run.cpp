@@ -1,21 +1,18 @@
 #include "scale_drift_slam/sim/simulation_run.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "scale_drift_slam/common/statistics.h"
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/loop/pose_graph_builder.h"
 
 namespace scale_drift_slam::sim {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 CorrectedTrajectory solveVariant(const SimulatedVisualOdometry& vo, const loop::PoseGraph& graph,
                                  loop::PoseGraphMode mode, const CorrectionOptions& options,
@@ -56,9 +53,7 @@ double localMapScale(const SimulatedVisualOdometry& vo, const SimulatedWorld& wo
     if (truth > 0.0) ratios.push_back(estimated / truth);
   }
   if (ratios.empty()) return std::numeric_limits<double>::quiet_NaN();
-  auto middle = ratios.begin() + ratios.size() / 2;
-  std::nth_element(ratios.begin(), middle, ratios.end());
-  return *middle;
+  return common::upperMedian(std::move(ratios));
 }
 
 LoopRecord makeLoopRecord(const SimulatedVisualOdometry& vo, const SimulatedWorld& world,
@@ -114,7 +109,7 @@ std::vector<geometry::SE3> correctedFramePoses(
 SimulationRun correctRun(const SimulatedVisualOdometry& vo, const SimulatedWorld& world,
                          const std::vector<loop::LoopConstraint>& loops,
                          const CorrectionOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   SimulationRun run;
   const map::Map& map = vo.map();
   run.frames = vo.frameRecords().size();
@@ -138,7 +133,7 @@ SimulationRun correctRun(const SimulatedVisualOdometry& vo, const SimulatedWorld
   run.graph.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
   run.se3 = solveVariant(vo, graph, loop::PoseGraphMode::kSE3, options, run.T_world_cam_truth);
   run.sim3 = solveVariant(vo, graph, loop::PoseGraphMode::kSim3, options, run.T_world_cam_truth);
-  run.correction_time_s = secondsSince(start);
+  run.correction_time_s = timer.seconds();
   return run;
 }
 
@@ -146,22 +141,21 @@ SimulationRun runExperiment(const std::string& name, const SimulatedWorld& world
                             const SimulatedVoParams& vo_params, double noise_px, std::uint32_t seed,
                             std::mt19937& rng, const LoopMeasurer& measure_loops,
                             const CorrectionOptions& correction) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   const double cpu_start = processCpuSeconds();
   SimulatedVisualOdometry vo(world.camera, vo_params);
   for (std::size_t i = 0; i < world.T_cam_world.size(); ++i)
     vo.processFrame(i, measureFrame(world, i, noise_px, rng), world.T_cam_world[i]);
-  const auto vo_end = std::chrono::steady_clock::now();
+  const double vo_time_s = timer.seconds();
   const std::vector<loop::LoopConstraint> loops = measure_loops(vo);
-  const auto loop_end = std::chrono::steady_clock::now();
+  const double loop_time_s = timer.seconds() - vo_time_s;
   SimulationRun run = correctRun(vo, world, loops, correction);
   run.experiment = name;
   run.seed = seed;
   run.noise_px = noise_px;
-  run.vo_time_s = std::chrono::duration<double>(vo_end - start).count();
-  run.loop_time_s = std::chrono::duration<double>(loop_end - vo_end).count();
-  run.total_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.vo_time_s = vo_time_s;
+  run.loop_time_s = loop_time_s;
+  run.total_time_s = timer.seconds();
   run.total_cpu_time_s = processCpuSeconds() - cpu_start;
   return run;
 }

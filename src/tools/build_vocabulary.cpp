@@ -3,7 +3,6 @@
 // (doc/place_recognition.md). The default needs no file at all: the vocabulary is learned online.
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +10,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/place_recognition_params_io.h"
 #include "scale_drift_slam/loop/appearance.h"
@@ -85,11 +85,10 @@ int run(const sds::io::CommandLine& cl) {
       descriptors.push_back(extractor.extract(image).descriptors);
     }
   }
-  const auto start = std::chrono::steady_clock::now();
+  const sds::common::Stopwatch timer;
   const sds::loop::Vocabulary vocabulary =
       sds::loop::Vocabulary::train(descriptors, params.vocabulary);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = timer.seconds();
   vocabulary.save(out);
   std::printf("%zu images -> %zu words (k=%d, L=%d) in %.1f s; %s: %.0f kB\n", descriptors.size(),
               vocabulary.numWords(), vocabulary.branching(), vocabulary.depth(), seconds,

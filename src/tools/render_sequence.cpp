@@ -1,11 +1,11 @@
 // render_sequence: renders a named synthetic scene with exact ground truth as a TUM-format folder
 // and, with --bag, a rosbag (doc/sequences.md).
 
-#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/ros/bag_io.h"
 #include "scale_drift_slam/sim/sequence.h"
@@ -97,10 +97,9 @@ int run(const sds::io::CommandLine& cl) {
   const sds::sim::SequenceParams params = parseParams(cl);
   const std::string out = cl.required("out");
   const bool quiet = cl.has("quiet");
-  const auto start = std::chrono::steady_clock::now();
+  const sds::common::Stopwatch timer;
   sds::sim::SequenceRenderer renderer(params);
-  const double build_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double build_s = timer.seconds();
   sds::sim::TumSequenceWriter folder(out, renderer.calibration(), renderer.scenario().description);
   std::unique_ptr<sds::ros_bag::SequenceBagWriter> bag;
   if (const auto bag_path = cl.value("bag")) {
@@ -117,8 +116,7 @@ int run(const sds::io::CommandLine& cl) {
   }
   folder.finish();
   bag.reset();
-  const double total_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double total_s = timer.seconds();
   if (!quiet) std::fprintf(stderr, "\n");
   std::printf("%s: %d frames %dx%d at %.4g Hz (%s, seed %u) -> %s%s%s\n", params.scene.c_str(), n,
               params.width, params.height, renderer.rate(),

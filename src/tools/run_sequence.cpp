@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +16,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/image_sequence.h"
@@ -175,7 +175,7 @@ void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameRe
 }
 
 int run(const io::CommandLine& args) {
-  const auto start = std::chrono::steady_clock::now();
+  const common::Stopwatch timer;
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
                            "quiet", "se3", "no-loop-closure"});
   const std::string dataset = args.positional(0, "DATASET");
@@ -201,8 +201,7 @@ int run(const io::CommandLine& args) {
   std::cout << "dataset: " << dataset << " (" << sequence->describe() << ")\n"
             << "camera: " << calibration.describe() << "\n";
   mapping::SlamSystem slam(geometry::makeCameraModel(calibration), params);
-  const double startup_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double startup_ms = timer.ms();
 
   std::vector<io::StampedPose> trajectory;
   std::ofstream frame_log = openFrameLog(out / "frames.csv");
@@ -216,13 +215,11 @@ int run(const io::CommandLine& args) {
     const std::optional<io::SequenceFrame> frame = sequence->next();
     if (!frame) break;
     ++frames;
-    const auto frame_start = std::chrono::steady_clock::now();
+    const common::Stopwatch frame_timer;
     const tracking::FrameResult r = processOne(slam, *frame);
     // What the camera sees: the whole call, with map updates applied (and the window BA when
     // the mapper runs inline).
-    const double frame_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_start)
-            .count();
+    const double frame_ms = frame_timer.ms();
     if (r.rejected) {
       ++rejected;
       std::cerr << (progress ? "\n" : "") << frame->source << ": " << r.message << "\n";

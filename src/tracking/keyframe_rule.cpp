@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "scale_drift_slam/common/statistics.h"
+
 namespace scale_drift_slam::tracking {
 
 void KeyframeRuleParams::validate() const {
@@ -30,9 +32,7 @@ double medianSceneDepth(const geometry::SE3& T_cam_world,
   if (depths.empty()) {
     throw std::invalid_argument("scene depth: no point lies in front of the camera");
   }
-  auto middle = depths.begin() + depths.size() / 2;
-  std::nth_element(depths.begin(), middle, depths.end());
-  return *middle;
+  return common::upperMedian(std::move(depths));
 }
 
 KeyframeDecision decideKeyframe(

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "scale_drift_slam/common/statistics.h"
+
 namespace scale_drift_slam::tracking {
 
 void InitializerParams::validate() const {
@@ -94,8 +96,7 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const Image
     status_ = why + status_;
     return std::nullopt;
   }
-  std::nth_element(disparity.begin(), disparity.begin() + disparity.size() / 2, disparity.end());
-  const double median_disparity = disparity[disparity.size() / 2];
+  const double median_disparity = common::upperMedian(std::move(disparity));
   if (median_disparity < params_.min_disparity_px) {
     status_ = "waiting for motion (median disparity " + std::to_string(median_disparity) + " px)";
     return std::nullopt;

@@ -5,6 +5,7 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "scale_drift_slam/common/statistics.h"
 #include "scale_drift_slam/map/map_update.h"
 
 namespace scale_drift_slam::tracking {
@@ -28,12 +29,6 @@ double threadCpuMs() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
 }
 
 }  // namespace
@@ -318,8 +313,7 @@ double Tracker::sceneDepth(const geometry::SE3& T_cam_world) const {
     const double z = map_.hasPoint(m.id) ? (T_cam_world * map_.point(m.id).p_world).z() : -1.0;
     if (z > 0.0) depths.push_back(z);
   }
-  const double depth = median(depths);
-  return depth > 0.0 ? depth : last_scene_depth_;
+  return depths.empty() ? last_scene_depth_ : common::upperMedian(std::move(depths));
 }
 
 }  // namespace scale_drift_slam::tracking

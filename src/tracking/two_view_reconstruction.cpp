@@ -7,6 +7,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "scale_drift_slam/common/statistics.h"
+
 namespace scale_drift_slam::tracking {
 
 void TwoViewParams::validate() const {
@@ -137,11 +139,7 @@ Hypothesis evaluate(const geometry::SE3& T, const Correspondences& a, const Corr
     parallaxes.push_back(parallax);
   }
   h.num_good = static_cast<int>(parallaxes.size());
-  if (!parallaxes.empty()) {
-    std::nth_element(parallaxes.begin(), parallaxes.begin() + parallaxes.size() / 2,
-                     parallaxes.end());
-    h.median_parallax_deg = parallaxes[parallaxes.size() / 2];
-  }
+  if (!parallaxes.empty()) h.median_parallax_deg = common::upperMedian(std::move(parallaxes));
   return h;
 }
 
@@ -261,8 +259,7 @@ TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences
   if (static_cast<int>(depths.size()) < params.min_points) {
     return refuse(result, "too few points survive the two-view bundle adjustment");
   }
-  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-  const double scale = 1.0 / depths[depths.size() / 2];
+  const double scale = 1.0 / common::upperMedian(depths);
   result.T_second_first = geometry::SE3(T.rotation(), T.translation() * scale);
   result.points_first.assign(n, Eigen::Vector3d::Zero());
   result.triangulated = good;
