@@ -77,61 +77,80 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   LoopCorrectionStatistics stats;
   stats.constraint = constraint;
   stats.mode = params_.loop_correction.graph.mode;
-  map::MapUpdate update;
-  if (!map_.hasKeyframe(constraint.current_id) || !map_.hasKeyframe(constraint.loop_id)) {
-    stats.reason = "the map holds no keyframe " +
-                   std::to_string(map_.hasKeyframe(constraint.current_id) ? constraint.loop_id
-                                                                          : constraint.current_id);
-    if (statistics) *statistics = stats;
-    return update;
+  for (const map::KeyframeId id : {constraint.current_id, constraint.loop_id}) {
+    if (!map_.hasKeyframe(id)) {
+      stats.reason = "the map holds no keyframe " + std::to_string(id);
+      if (statistics) *statistics = stats;
+      return {};
+    }
   }
-  const LoopCorrectionParams& p = params_.loop_correction;
+  // The earlier loops and this one; kept for later graphs only once the graph is solved (a graph
+  // that cannot be built or solved throws and must not poison the next loops).
+  std::vector<loop::PoseGraphEdge> loop_edges = loop_edges_;
+  loop_edges.push_back(loopEdge(constraint));
+  const loop::PoseGraphResult solved = solveLoopGraph(loop_edges, &stats);
+  stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();
+  loop_edges_ = std::move(loop_edges);
+  map::MapUpdate update = correctMap(solved, &stats);
+  for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
+    update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
+  corrections_.record(update);
+  stats.applied = true;
+  stats.total_ms = timer.ms();
+  if (statistics) *statistics = stats;
+  return update;
+}
+
+loop::PoseGraphEdge Mapper::loopEdge(const loop::LoopConstraint& constraint) const {
   loop::PoseGraphEdge edge;
   edge.from = constraint.current_id;
   edge.to = constraint.loop_id;
   edge.S_from_to = constraint.S_current_loop;
-  edge.information *= p.loop_edge_weight;
+  edge.information *= params_.loop_correction.loop_edge_weight;
   edge.kind = loop::EdgeKind::kLoop;
-  // The earlier loops and this one; kept for later graphs only once this correction succeeded
-  // (a graph that cannot be built or solved throws and must not poison the next loops).
-  std::vector<loop::PoseGraphEdge> loop_edges = loop_edges_;
-  loop_edges.push_back(edge);
+  return edge;
+}
 
+loop::PoseGraphResult Mapper::solveLoopGraph(const std::vector<loop::PoseGraphEdge>& loop_edges,
+                                             LoopCorrectionStatistics* stats) const {
+  const common::Stopwatch timer;
+  const LoopCorrectionParams& p = params_.loop_correction;
   // The graph over all keyframes, the oldest fixed (it defines the world frame).
   loop::PoseGraphBuilderOptions builder;
   builder.min_shared_points = p.covisibility_min_shared_points;
   builder.max_covisibility_edges_per_keyframe = p.covisibility_max_edges;
   const map::KeyframeId oldest = map_.keyframes().begin()->first;
   const loop::PoseGraph graph = loop::buildPoseGraph(map_, {}, loop_edges, {oldest}, builder);
-  stats.build_ms = timer.ms();
-  stats.vertices = graph.vertices().size();
-  stats.loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
-  stats.covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
-  const loop::PoseGraphResult solved = graph.optimize(p.graph);
-  stats.graph_iterations = solved.iterations;
-  stats.graph_converged = solved.converged;
-  stats.graph_initial_chi2 = solved.initial_chi2;
-  stats.graph_final_chi2 = solved.final_chi2;
-  stats.graph_ms = 1e3 * solved.time_s;
+  stats->build_ms = timer.ms();
+  stats->vertices = graph.vertices().size();
+  stats->loop_edges = graph.numEdges(loop::EdgeKind::kLoop);
+  stats->covisibility_edges = graph.numEdges(loop::EdgeKind::kCovisibility);
+  loop::PoseGraphResult solved = graph.optimize(p.graph);
+  stats->graph_iterations = solved.iterations;
+  stats->graph_converged = solved.converged;
+  stats->graph_initial_chi2 = solved.initial_chi2;
+  stats->graph_final_chi2 = solved.final_chi2;
+  stats->graph_ms = 1e3 * solved.time_s;
+  return solved;
+}
 
+map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
+                                  LoopCorrectionStatistics* stats) {
+  map::MapUpdate update;
   // C_k = S_k_new^-1 T_k_old maps old world coordinates near keyframe k into corrected ones.
   for (const auto& [id, S_kf_world] : solved.S_kf_world) {
     update.keyframe_corrections.emplace_back(
         id, S_kf_world.inverse() * geometry::Sim3(map_.keyframe(id).T_kf_world));
   }
   update.S_new_old = update.keyframe_corrections.back().second;  // the newest keyframe's
-  loop_edges_ = std::move(loop_edges);
-  for (const loop::PoseGraphEdge& loop_edge : loop_edges_)
-    update.loop_links.emplace_back(loop_edge.from, loop_edge.to);
-  stats.current_correction_scale = solved.S_kf_world.at(constraint.current_id).scale();
   const common::Stopwatch correction_timer;
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
-  stats.correction_ms = correction_timer.ms();
-  const StructureOnlyBAResult structure =
-      refineStructure(map_, {}, {focal_length_px_, focal_length_px_}, p.structure);
-  stats.structure_ms = 1e3 * structure.time_s;
-  stats.reprojection_before = structure.before;  // after the correction, before the refinement
-  stats.reprojection_after = structure.after;
+  stats->correction_ms = correction_timer.ms();
+  const StructureOnlyBAResult structure = refineStructure(
+      map_, {}, {focal_length_px_, focal_length_px_}, params_.loop_correction.structure);
+  stats->structure_ms = 1e3 * structure.time_s;
+  stats->reprojection_before = structure.before;  // after the correction, before the refinement
+  stats->reprojection_after = structure.after;
 
   for (const auto& [id, keyframe] : map_.keyframes())
     update.keyframe_poses.emplace_back(id, keyframe.T_kf_world);
@@ -139,10 +158,6 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
     update.point_positions.emplace_back(id, point.p_world);
   map_.bumpVersion();
   update.map_version = map_.version();
-  corrections_.record(update);
-  stats.applied = true;
-  stats.total_ms = timer.ms();
-  if (statistics) *statistics = stats;
   return update;
 }
 

@@ -93,6 +93,16 @@ class Mapper {
   const std::vector<loop::PoseGraphEdge>& loopEdges() const { return loop_edges_; }
 
  private:
+  /// The loop edge of a constraint, weighted by loop_correction.loop_edge_weight.
+  loop::PoseGraphEdge loopEdge(const loop::LoopConstraint& constraint) const;
+  /// Builds the pose graph over all keyframes with these loop edges and solves it; throws
+  /// what the builder or the solver throw.
+  loop::PoseGraphResult solveLoopGraph(const std::vector<loop::PoseGraphEdge>& loop_edges,
+                                       LoopCorrectionStatistics* stats) const;
+  /// Moves keyframes and points with the solved graph, refines the points (structure-only BA)
+  /// and returns the update for the tracker.
+  map::MapUpdate correctMap(const loop::PoseGraphResult& solved, LoopCorrectionStatistics* stats);
+
   MapperParams params_;
   double focal_length_px_;
   map::Map map_;
