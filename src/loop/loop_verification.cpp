@@ -62,55 +62,16 @@ struct PoseSolution {
   std::vector<bool> inlier;   ///< Per final match.
 };
 
-/// Step 3b: the candidate's map points searched in the current image around T_current_loop.
-std::vector<tracking::SearchMatch> searchCandidatePoints(const VerificationView& current,
-                                                         const VerificationView& candidate,
-                                                         const geometry::SE3& T_current_loop,
-                                                         const geometry::CameraModel& camera,
-                                                         const LoopVerificationParams& params,
-                                                         std::vector<std::size_t>* searched_index) {
-  std::vector<tracking::PointAppearance> patches;
-  patches.reserve(candidate.point_ids.size());
-  std::vector<tracking::SearchPoint> points;
-  std::vector<double> depths;
-  for (std::size_t i = 0; i < candidate.point_ids.size(); ++i) {
-    const std::optional<Eigen::Vector2d> px = camera.project(candidate.point_camera[i]);
-    tracking::PointAppearance patch;
-    if (!px || !patch.cut(candidate.image, *px)) continue;
-    patches.push_back(std::move(patch));
-    points.push_back({candidate.point_camera[i], geometry::SE3(), &patches.back()});
-    searched_index->push_back(i);
-    depths.push_back(candidate.point_camera[i].z());
-  }
-  if (points.empty()) return {};
-  const double translation_sigma =
-      params.search_translation_sigma * common::upperMedian(std::move(depths));
-  Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Zero();
-  Sigma.diagonal().head<3>().setConstant(params.search_rotation_sigma *
-                                         params.search_rotation_sigma);
-  Sigma.diagonal().tail<3>().setConstant(translation_sigma * translation_sigma);
-  const tracking::CornerGrid corners =
-      tracking::detectSearchCorners(current.image.base(), params.search);
-  return tracking::activeSearch(points, T_current_loop, Sigma, camera, current.image, corners,
-                                params.search);
-}
-
-PoseSolution solvePose(const VerificationView& current, const VerificationView& candidate,
-                       const std::vector<DescriptorMatch>& matches,
-                       const geometry::CameraModel& camera, const LoopVerificationParams& params) {
-  params.validate();
-  validateView(current, "current");
-  validateView(candidate, "candidate");
-  const geometry::CameraCalibration& calibration = camera.calibration();
-  const double focal = calibration.meanFocalLength();
-  PoseSolution solution;
-  LoopVerification& v = solution.verification;
-  v.descriptor_matches = static_cast<int>(matches.size());
-
-  // Steps 1-2: descriptor matches with a regressed depth on the candidate side.
-  const DepthRegressor candidate_depths = regressorOf(candidate, focal, params.depth);
-  LoopConstraintInput& input = solution.input;
-  input.focal_length_px = focal;
+/// Steps 1-2: the descriptor matches whose candidate keypoint gets a depth from the candidate's
+/// map points (regressed), as 2D-3D matches. Throws when a match names a missing keypoint.
+LoopConstraintInput matchesWithDepth(const VerificationView& current,
+                                     const VerificationView& candidate,
+                                     const std::vector<DescriptorMatch>& matches,
+                                     const geometry::CameraCalibration& calibration,
+                                     const DepthRegressionParams& params) {
+  LoopConstraintInput input;
+  input.focal_length_px = calibration.meanFocalLength();
+  const DepthRegressor candidate_depths = regressorOf(candidate, input.focal_length_px, params);
   for (const DescriptorMatch& m : matches) {
     if (m.query < 0 || m.candidate < 0 ||
         static_cast<std::size_t>(m.query) >= current.features->size() ||
@@ -124,6 +85,72 @@ PoseSolution solvePose(const VerificationView& current, const VerificationView& 
     input.matches.push_back(
         {normalised(current.features->keypoints[m.query], calibration), *p_candidate});
   }
+  return input;
+}
+
+/// A candidate map point found in the current image by the patch search.
+struct FoundPoint {
+  std::size_t candidate_index = 0;  ///< Into the candidate view's point arrays.
+  tracking::SearchMatch match;
+};
+
+struct CandidateSearch {
+  std::vector<FoundPoint> found;
+  int searched = 0;  ///< Points whose patch was matched against the current image.
+};
+
+/// Step 3b: the candidate's map points searched in the current image around T_current_loop.
+CandidateSearch searchCandidatePoints(const VerificationView& current,
+                                      const VerificationView& candidate,
+                                      const geometry::SE3& T_current_loop,
+                                      const geometry::CameraModel& camera,
+                                      const LoopVerificationParams& params) {
+  std::vector<tracking::PointAppearance> patches;
+  patches.reserve(candidate.point_ids.size());
+  std::vector<tracking::SearchPoint> points;
+  std::vector<std::size_t> point_index;  // into the candidate view, per search point
+  std::vector<double> depths;
+  for (std::size_t i = 0; i < candidate.point_ids.size(); ++i) {
+    const std::optional<Eigen::Vector2d> px = camera.project(candidate.point_camera[i]);
+    tracking::PointAppearance patch;
+    if (!px || !patch.cut(candidate.image, *px)) continue;
+    patches.push_back(std::move(patch));
+    points.push_back({candidate.point_camera[i], geometry::SE3(), &patches.back()});
+    point_index.push_back(i);
+    depths.push_back(candidate.point_camera[i].z());
+  }
+  CandidateSearch search;
+  if (points.empty()) return search;
+  const double translation_sigma =
+      params.search_translation_sigma * common::upperMedian(std::move(depths));
+  Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Zero();
+  Sigma.diagonal().head<3>().setConstant(params.search_rotation_sigma *
+                                         params.search_rotation_sigma);
+  Sigma.diagonal().tail<3>().setConstant(translation_sigma * translation_sigma);
+  const tracking::CornerGrid corners =
+      tracking::detectSearchCorners(current.image.base(), params.search);
+  const std::vector<tracking::SearchMatch> matches = tracking::activeSearch(
+      points, T_current_loop, Sigma, camera, current.image, corners, params.search);
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    search.searched += matches[k].searched;
+    if (matches[k].found) search.found.push_back({point_index[k], matches[k]});
+  }
+  return search;
+}
+
+PoseSolution solvePose(const VerificationView& current, const VerificationView& candidate,
+                       const std::vector<DescriptorMatch>& matches,
+                       const geometry::CameraModel& camera, const LoopVerificationParams& params) {
+  params.validate();
+  validateView(current, "current");
+  validateView(candidate, "candidate");
+  PoseSolution solution;
+  LoopVerification& v = solution.verification;
+  v.descriptor_matches = static_cast<int>(matches.size());
+
+  // Steps 1-2: descriptor matches with a regressed depth on the candidate side.
+  LoopConstraintInput& input = solution.input;
+  input = matchesWithDepth(current, candidate, matches, camera.calibration(), params.depth);
   v.matches_with_depth = static_cast<int>(input.matches.size());
 
   // Step 3: P3P RANSAC and refinement on them.
@@ -136,21 +163,16 @@ PoseSolution solvePose(const VerificationView& current, const VerificationView& 
   }
 
   // Step 3b: more matches by warped-patch search, then the final refinement on all of them.
-  std::vector<std::size_t> searched_index;
-  std::vector<tracking::SearchMatch> found;
+  CandidateSearch search;
   if (!current.image.levels.empty() && !candidate.image.levels.empty()) {
-    found = searchCandidatePoints(current, candidate, first.constraint.T_current_loop, camera,
-                                  params, &searched_index);
+    search =
+        searchCandidatePoints(current, candidate, first.constraint.T_current_loop, camera, params);
   }
+  v.searched_points = search.searched;
+  v.found_points = static_cast<int>(search.found.size());
   const std::size_t num_descriptor_matches = input.matches.size();
-  std::vector<std::size_t> found_index;  // into candidate points, per added match
-  for (std::size_t k = 0; k < found.size(); ++k) {
-    v.searched_points += found[k].searched;
-    if (!found[k].found) continue;
-    input.matches.push_back({found[k].xy, candidate.point_camera[searched_index[k]]});
-    found_index.push_back(k);
-  }
-  v.found_points = static_cast<int>(found_index.size());
+  for (const FoundPoint& point : search.found)
+    input.matches.push_back({point.match.xy, candidate.point_camera[point.candidate_index]});
   const LoopConstraintResult final_pose =
       estimateLoopPose(input, params.constraint, &solution.inlier);
   v.constraint = final_pose.constraint;
@@ -158,11 +180,11 @@ PoseSolution solvePose(const VerificationView& current, const VerificationView& 
     v.reason = "after the patch search: " + final_pose.reason;
     return solution;
   }
-  for (std::size_t j = 0; j < found_index.size(); ++j) {
+  for (std::size_t j = 0; j < search.found.size(); ++j) {
     if (!solution.inlier[num_descriptor_matches + j]) continue;
-    const tracking::SearchMatch& match = found[found_index[j]];
+    const FoundPoint& point = search.found[j];
     v.inlier_points.push_back(
-        {candidate.point_ids[searched_index[found_index[j]]], match.px, match.xy});
+        {candidate.point_ids[point.candidate_index], point.match.px, point.match.xy});
   }
   if (v.constraint.num_inliers < params.min_final_inliers) {
     v.reason = "only " + std::to_string(v.constraint.num_inliers) + " inliers (at least " +
