@@ -310,6 +310,7 @@ PoseGraphResult PoseGraph::optimize(const PoseGraphOptions& options) const {
   }
   // summary.iterations holds iteration 0 (the initial evaluation) too.
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result.guess_loops = guess.loops;
   result.guess_chi2 = 2.0 * summary.initial_cost;  // Ceres minimises 0.5 |L^T r|^2
   result.initial_chi2 = options.loop_error_passes > 0 ? guess.given_chi2 : result.guess_chi2;
   result.final_chi2 = 2.0 * summary.final_cost;

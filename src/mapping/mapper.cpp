@@ -129,6 +129,8 @@ loop::PoseGraphResult Mapper::solveLoopGraph(const std::vector<loop::PoseGraphEd
   stats->graph_iterations = solved.iterations;
   stats->graph_converged = solved.converged;
   stats->graph_initial_chi2 = solved.initial_chi2;
+  stats->graph_guess_loops = solved.guess_loops;
+  stats->graph_guess_chi2 = solved.guess_chi2;
   stats->graph_final_chi2 = solved.final_chi2;
   stats->graph_ms = 1e3 * solved.time_s;
   return solved;

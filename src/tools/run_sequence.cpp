@@ -143,6 +143,8 @@ nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
                      {"graph_iterations", loop.graph_iterations},
                      {"graph_converged", loop.graph_converged},
                      {"graph_initial_chi2", loop.graph_initial_chi2},
+                     {"graph_guess_loops", loop.graph_guess_loops},
+                     {"graph_guess_chi2", loop.graph_guess_chi2},
                      {"graph_final_chi2", loop.graph_final_chi2},
                      {"graph_ms", loop.graph_ms},
                      {"structure_only_ba_ms", loop.structure_ms},

@@ -38,6 +38,9 @@ const char* const kUsage =
     "        --jacobians analytic|autodiff   pose-graph derivatives (default analytic)\n"
     "        --structure-iterations N        structure-only BA iterations (default 10)\n"
     "        --covisibility N       add edges between keyframes sharing >= N points (default 0)\n"
+    "        --loop-error-passes N  passes of the initial guess that spreads the loop's error\n"
+    "                               along the odometry before LM (default 3; 0: LM starts from\n"
+    "                               the map's poses)\n"
     "  circle --out DIR        the paper's circle (Figure 3): 720 poses on a circle of radius\n"
     "        10 m looking outwards at 5000 points on a ring of radius 11 m; visual odometry with\n"
     "        feature filters and a window BA of 10, the loop last -> first keyframe measured from\n"
@@ -61,9 +64,12 @@ const char* const kUsage =
 
 int runKeble(const CommandLine& args) {
   args.rejectUnknownFlags(
-      {"map", "out", "max-iterations", "jacobians", "structure-iterations", "covisibility"});
+      {"map", "out", "max-iterations", "jacobians", "structure-iterations", "covisibility",
+       "loop-error-passes"});
   sds::sim::KebleExperimentOptions options;
   options.graph.max_iterations = static_cast<int>(args.integer("max-iterations", 100));
+  options.graph.loop_error_passes = static_cast<int>(
+      args.integer("loop-error-passes", sds::loop::PoseGraphOptions().loop_error_passes));
   options.graph.jacobians = sds::loop::parsePoseGraphJacobians(args.text("jacobians", "analytic"));
   options.structure.max_iterations = static_cast<int>(args.integer("structure-iterations", 10));
   options.min_shared_points = static_cast<int>(args.integer("covisibility", 0));

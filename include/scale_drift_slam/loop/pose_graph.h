@@ -84,7 +84,9 @@ struct PoseGraphEdge {
 struct PoseGraphResult {
   /// Every vertex after the optimisation (scale exactly 1 in SE(3) mode).
   std::map<map::KeyframeId, geometry::Sim3> S_kf_world;
-  int iterations = 0;         ///< LM steps taken (accepted and rejected).
+  int iterations = 0;  ///< LM steps taken (accepted and rejected).
+  /// Loop edges whose error the initial guess distributed (0: LM started from the given poses).
+  int guess_loops = 0;
   double initial_chi2 = 0.0;  ///< sum_edges r^T Lambda r of the given vertices ...
   double guess_chi2 = 0.0;    ///< ... where LM started (the loop errors distributed) ...
   double final_chi2 = 0.0;    ///< ... and at the end.

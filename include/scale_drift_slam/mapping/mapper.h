@@ -60,6 +60,10 @@ struct LoopCorrectionStatistics {
   int graph_iterations = 0;
   bool graph_converged = false;  ///< False: LM stopped at its iteration limit (still applied).
   double graph_initial_chi2 = 0.0, graph_final_chi2 = 0.0;
+  /// Where LM started: the loop errors of graph_guess_loops loop edges distributed (0: the map's
+  /// poses, chi2 graph_initial_chi2).
+  int graph_guess_loops = 0;
+  double graph_guess_chi2 = 0.0;
   /// Scale of the correction at the current keyframe (1 for SE(3)).
   double current_correction_scale = 1.0;
   /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
