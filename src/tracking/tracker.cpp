@@ -231,8 +231,9 @@ bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
     previous_measurements_.push_back(
         {ids[carried->seed[i]], px, camera_->undistortToNormalized(px)});
   }
+  // The feature candidates followed the flow through the lost frames (track()), so their pixels
+  // are in this last frame too and they are kept.
   previous_image_ = pending.frames.back();
-  candidates_.clear();  // their pixels are in an older frame; the next keyframe spawns new ones
   T_previous_world_ = T_before_previous_world_ = carried->T_cam_world;
   last_scene_depth_ = sceneDepth(carried->T_cam_world);
   resume_from_relocalisation_ = true;

@@ -54,8 +54,6 @@ class FeatureCandidates {
   /// that their pixels stay in the latest image; those lost by the flow are dropped.
   void follow(const std::vector<cv::Point2f>& tracked, const std::vector<unsigned char>& ok,
               const geometry::CameraModel& camera);
-  /// Drops every candidate (their pixels belong to frames the tracker no longer follows).
-  void clear() { candidates_.clear(); }
 
   /// At a new keyframe: records the view of every candidate, promotes the certain ones that
   /// pass the promotion rule (removing them), and returns those.
