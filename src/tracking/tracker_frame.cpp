@@ -50,6 +50,9 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   if (was_lost) {
     result->relocalised = from_relocalisation;
     result->message = from_relocalisation ? "relocalised" : "recovered";
+    // A request still pending is void: its frames end here, and a later loss starts a new one
+    // (appending to it would leave a gap of tracked frames for the answer to be carried across).
+    relocalisation_.reset();
   }
   state_ =
       result->num_inliers >= params_.good_inliers ? TrackingState::kGood : TrackingState::kWeak;

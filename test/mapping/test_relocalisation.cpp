@@ -12,6 +12,7 @@
 #include "scale_drift_slam/evaluation/alignment.h"
 #include "scale_drift_slam/geometry/so3.h"
 #include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::mapping {
 namespace {
@@ -75,6 +76,44 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   EXPECT_LE(first_relocalised, 33);
   EXPECT_LT(worst_error, 0.03);
   EXPECT_GE(slam.relocalisations(), 1);
+}
+
+// A request ends when tracking recovers by itself: lost again later, the tracker asks afresh
+// (appending the new frames to the old request would leave a gap of tracked frames that a late
+// answer would be carried across by flow), and the old request's answer is refused.
+TEST(Relocalisation, ARequestEndsWhenTrackingRecoversByItself) {
+  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto cam = camera();
+  tracking::Tracker tracker(cam, tracking::TrackerParams{});
+  const auto process = [&](double t, const cv::Mat& image) {
+    return tracker.processFrame(t, image, tracking::PixelEncoding::kMono8);
+  };
+  const auto render = [&](int k) {
+    return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
+  };
+  for (int k = 0; k < 30; ++k)
+    process(0.1 * k, render(k));
+  ASSERT_EQ(tracker.state(), tracking::TrackingState::kGood);
+  // Something else entirely (textured, so not rejected as blank): lost, a request goes out.
+  const cv::Mat elsewhere = tracking::test::texturedImage(kWidth, kHeight, 99);
+  const tracking::FrameResult first_loss = process(3.0, elsewhere);
+  ASSERT_EQ(first_loss.state, tracking::TrackingState::kLost) << first_loss.message;
+  ASSERT_TRUE(first_loss.relocalisation_request.has_value());
+  // Back where it was: found again without an answer.
+  const tracking::FrameResult recovered = process(3.1, render(29));
+  ASSERT_NE(recovered.state, tracking::TrackingState::kLost) << recovered.message;
+  EXPECT_FALSE(recovered.relocalised);
+  // Lost again (well within relocalisation_retry_frames): a new request, not more frames for
+  // the old one.
+  const tracking::FrameResult second_loss = process(3.2, elsewhere);
+  ASSERT_EQ(second_loss.state, tracking::TrackingState::kLost) << second_loss.message;
+  ASSERT_TRUE(second_loss.relocalisation_request.has_value());
+  EXPECT_GT(second_loss.relocalisation_request->frame_index,
+            first_loss.relocalisation_request->frame_index);
+  map::RelocalisationAnswer stale;
+  stale.frame_index = first_loss.relocalisation_request->frame_index;
+  stale.success = true;
+  EXPECT_FALSE(tracker.applyRelocalisation(stale));
 }
 
 // Lost in a map too young to relocalise in (no vocabulary yet): after restart_after_lost_frames
