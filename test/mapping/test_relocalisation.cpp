@@ -27,6 +27,12 @@ geometry::SE3 cameraPose(int k) {
   return tracking::test::sweepPose(k);
 }
 
+/// What the camera sees of the room at pose k of the sweep.
+cv::Mat renderView(const std::vector<tracking::test::TexturedPlane>& room,
+                   const geometry::CameraModel& cam, int k) {
+  return tracking::test::renderPlanes(room, cam.K(), cameraPose(k).inverse(), kWidth, kHeight);
+}
+
 TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
@@ -34,9 +40,7 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   params.mapping_thread = false;
   params.loop.recognition.online_training_keyframes = 5;  // a short run: learn the words early
   SlamSystem slam(cam, params);
-  const auto render = [&](int k) {
-    return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
-  };
+  const auto render = [&](int k) { return renderView(room, *cam, k); };
   std::vector<Eigen::Vector3d> estimate, truth;
   for (int k = 0; k < 80; ++k) {
     const tracking::FrameResult r =
@@ -88,9 +92,7 @@ TEST(Relocalisation, ARequestEndsWhenTrackingRecoversByItself) {
   const auto process = [&](double t, const cv::Mat& image) {
     return tracker.processFrame(t, image, tracking::PixelEncoding::kMono8);
   };
-  const auto render = [&](int k) {
-    return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
-  };
+  const auto render = [&](int k) { return renderView(room, *cam, k); };
   for (int k = 0; k < 30; ++k)
     process(0.1 * k, render(k));
   ASSERT_EQ(tracker.state(), tracking::TrackingState::kGood);
@@ -130,9 +132,7 @@ TEST(Relocalisation, AYoungMapLostTooLongIsDiscardedAndANewOneStarts) {
     const auto process = [&](double t, const cv::Mat& image) {
       return slam.processFrame(t, image, tracking::PixelEncoding::kMono8);
     };
-    const auto render = [&](int k) {
-      return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
-    };
+    const auto render = [&](int k) { return renderView(room, *cam, k); };
     for (int k = 0; k < 30; ++k)
       process(0.1 * k, render(k));
     ASSERT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
