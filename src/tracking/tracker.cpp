@@ -253,6 +253,19 @@ void Tracker::applyMapUpdate(const map::MapUpdate& update) {
   last_loop_version_ = update.map_version;
 }
 
+map::PointId Tracker::addNewPoint(const Eigen::Vector3d& p_world,
+                                  map::KeyframeId reference_keyframe, PointAppearance appearance,
+                                  map::KeyframeMessage* message) {
+  TrackedPoint point;
+  point.id = next_point_id_++;
+  point.p_world = p_world;
+  point.reference_keyframe = reference_keyframe;
+  point.appearance = std::move(appearance);
+  message->new_points.push_back({point.id, p_world, reference_keyframe});
+  map_.addPoint(std::move(point));
+  return next_point_id_ - 1;
+}
+
 map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                            const ImagePyramid& image) {
   map::KeyframeMessage message;
@@ -278,19 +291,16 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   std::vector<Eigen::Vector2d> occupied;
   for (std::size_t i = 0; i < initial->p_first.size(); ++i) {
     if (!initial->triangulated[i]) continue;
-    TrackedPoint point;
-    if (!point.appearance.cut(initial->first_image, initial->px_first[i])) continue;
-    point.id = next_point_id_++;
-    point.p_world = initial->p_first[i];
-    point.reference_keyframe = first.keyframe.id;
-    first.new_points.push_back({point.id, point.p_world, first.keyframe.id});
-    first.keyframe.observations.push_back({point.id, initial->xy_first[i]});
-    second.keyframe.observations.push_back({point.id, initial->xy_second[i]});
-    first_kf.points.push_back(point.id);
-    second_kf.points.push_back(point.id);
-    previous_measurements_.push_back({point.id, initial->px_second[i], initial->xy_second[i]});
+    PointAppearance appearance;
+    if (!appearance.cut(initial->first_image, initial->px_first[i])) continue;
+    const map::PointId id =
+        addNewPoint(initial->p_first[i], first.keyframe.id, std::move(appearance), &first);
+    first.keyframe.observations.push_back({id, initial->xy_first[i]});
+    second.keyframe.observations.push_back({id, initial->xy_second[i]});
+    first_kf.points.push_back(id);
+    second_kf.points.push_back(id);
+    previous_measurements_.push_back({id, initial->px_second[i], initial->xy_second[i]});
     occupied.push_back(initial->px_second[i]);
-    map_.addPoint(std::move(point));
   }
   map_.addKeyframe(std::move(first_kf));
   map_.addKeyframe(std::move(second_kf));

@@ -164,22 +164,17 @@ void Tracker::dropKeyframe(double timestamp, const ImagePyramid& image,
   }
   map_.addKeyframe(std::move(tracked));
   for (PromotedFeature& feature : candidates_.promote(kf_id, T_kf_world)) {
-    TrackedPoint point;
-    point.id = next_point_id_++;
-    point.p_world = feature.p_world;
-    point.reference_keyframe = feature.origin;
-    point.appearance = std::move(feature.appearance);
-    message.new_points.push_back({point.id, point.p_world, feature.origin});
+    const map::PointId id =
+        addNewPoint(feature.p_world, feature.origin, std::move(feature.appearance), &message);
     for (const PromotionView& view : feature.views) {
       if (view.keyframe_id == kf_id) {
-        message.keyframe.observations.push_back({point.id, view.xy});
+        message.keyframe.observations.push_back({id, view.xy});
       } else {
-        message.earlier_observations.push_back({view.keyframe_id, point.id, view.xy});
+        message.earlier_observations.push_back({view.keyframe_id, id, view.xy});
       }
-      map_.linkPoint(view.keyframe_id, point.id);
+      map_.linkPoint(view.keyframe_id, id);
     }
-    if (const auto px = camera_->project(T_kf_world * point.p_world)) occupied.push_back(*px);
-    map_.addPoint(std::move(point));
+    if (const auto px = camera_->project(T_kf_world * feature.p_world)) occupied.push_back(*px);
   }
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());

@@ -127,6 +127,9 @@ class Tracker {
                           std::vector<Measurement>* inliers, FrameResult* result);
   void dropKeyframe(double timestamp, const ImagePyramid& image,
                     const std::vector<Measurement>& inliers, FrameResult* result);
+  /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
+  map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
+                           PointAppearance appearance, map::KeyframeMessage* message);
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                     const ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
