@@ -5,10 +5,9 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Cholesky>
-
 #include "../mapping/reprojection_cost.h"
 #include "scale_drift_slam/tracking/inverse_depth_filter.h"
+#include "small_levenberg_marquardt.h"
 
 namespace scale_drift_slam::tracking {
 namespace {
@@ -52,33 +51,16 @@ PromotionResult promoteFeature(const InverseDepthFilter& filter,
   }
   // Levenberg-Marquardt on the 3 coordinates, from the filter's estimate.
   Eigen::Vector3d x = filter.pointInWorld();
-  Eigen::Matrix3d H;
-  Eigen::Vector3d g;
-  double cost = pointCost(views, x, focal_length_px, &H, &g, nullptr);
+  internal::SmallLmOptions lm;
+  lm.max_iterations = 10;
+  lm.initial_damping = 1e-4;
+  const double cost = internal::minimiseSmallLm(
+      &x, lm, [&](const Eigen::Vector3d& p, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
+        return pointCost(views, p, focal_length_px, H, g, nullptr);
+      });
   if (!std::isfinite(cost)) {
     result.reason = "the feature is behind a keyframe";
     return result;
-  }
-  double mu = 1e-4;
-  for (int iteration = 0; iteration < 10; ++iteration) {
-    bool accepted = false;
-    for (int attempt = 0; attempt < 8 && !accepted; ++attempt) {
-      Eigen::Matrix3d A = H;
-      A.diagonal() *= 1.0 + mu;
-      const Eigen::Vector3d x_new = x - A.ldlt().solve(g);
-      const double cost_new = pointCost(views, x_new, focal_length_px, nullptr, nullptr, nullptr);
-      if (cost_new < cost) {
-        accepted = true;
-        const bool converged = cost - cost_new < 1e-10 * cost + 1e-14;
-        x = x_new;
-        cost = pointCost(views, x, focal_length_px, &H, &g, nullptr);
-        mu = std::max(mu * 0.1, 1e-10);
-        if (converged) iteration = 10;
-      } else {
-        mu *= 10.0;
-      }
-    }
-    if (!accepted) break;
   }
   pointCost(views, x, focal_length_px, nullptr, nullptr, &result.errors_px);
   result.p_world = x;

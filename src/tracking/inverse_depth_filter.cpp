@@ -4,8 +4,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
+
+#include "small_levenberg_marquardt.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -93,42 +94,28 @@ InverseDepthFilter::Update InverseDepthFilter::update(const geometry::SE3& T_cam
   // chi2(y) = (y - y0)^T Lambda (y - y0) + w |z - h(y)|^2 (paper eq. 19), minimised with LM;
   // q < 0 (behind the origin) and points behind the current camera are infeasible.
   const Eigen::Vector3d y0 = y_;
-  auto chi2 = [&](const Eigen::Vector3d& y, Eigen::Vector2d* h, Eigen::Matrix<double, 2, 3>* J) {
-    if (!(y.z() >= 0.0) || !measurementModel(R, t, y, h, J)) {
+  auto chi2 = [&](const Eigen::Vector3d& y, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
+    Eigen::Vector2d h;
+    Eigen::Matrix<double, 2, 3> J;
+    if (!(y.z() >= 0.0) || !measurementModel(R, t, y, &h, &J)) {
       return std::numeric_limits<double>::infinity();
     }
     const Eigen::Vector3d d = y - y0;
-    return d.dot(information_ * d) + w * (xy - *h).squaredNorm();
+    if (H != nullptr) {
+      *H = information_ + w * J.transpose() * J;
+      *g = information_ * d - w * J.transpose() * (xy - h);
+    }
+    return d.dot(information_ * d) + w * (xy - h).squaredNorm();
   };
+  internal::SmallLmOptions lm;
+  lm.max_iterations = params_.max_iterations;
+  lm.initial_damping = 1e-3;
+  lm.min_diagonal = 1e-12 * w;
   Eigen::Vector3d y = y0;
+  if (!std::isfinite(internal::minimiseSmallLm(&y, lm, chi2))) return Update::kRejected;
   Eigen::Vector2d h;
   Eigen::Matrix<double, 2, 3> J;
-  double cost = chi2(y, &h, &J);
-  if (!std::isfinite(cost)) return Update::kRejected;
-  double mu = 1e-3;
-  bool converged = false;
-  for (int iteration = 0; iteration < params_.max_iterations && !converged; ++iteration) {
-    const Eigen::Matrix3d H = information_ + w * J.transpose() * J;
-    const Eigen::Vector3d g = information_ * (y - y0) - w * J.transpose() * (xy - h);
-    bool accepted = false;
-    for (int attempt = 0; attempt < 8 && !accepted; ++attempt) {
-      Eigen::Matrix3d A = H;
-      A.diagonal() += mu * H.diagonal().cwiseMax(1e-12 * w);
-      const Eigen::Vector3d y_new = y - A.ldlt().solve(g);
-      Eigen::Vector2d h_new;
-      Eigen::Matrix<double, 2, 3> J_new;
-      const double cost_new = chi2(y_new, &h_new, &J_new);
-      if (cost_new < cost) {
-        converged = cost - cost_new < 1e-10 * cost + 1e-14;
-        y = y_new, h = h_new, J = J_new, cost = cost_new;
-        mu = std::max(mu * 0.1, 1e-10);
-        accepted = true;
-      } else {
-        mu *= 10.0;
-      }
-    }
-    if (!accepted) break;  // No step lowers chi2: at its minimum up to numerics.
-  }
+  measurementModel(R, t, y, &h, &J);
   if (std::sqrt(w * (xy - h).squaredNorm()) > params_.max_residual_sigmas) return Update::kRejected;
   // Covariance back-propagation (paper eq. 20): Lambda <- Lambda + J^T Lambda_z J at the new y.
   y_ = y;
