@@ -60,7 +60,6 @@ WindowBundleInput makeWindowInput(const map::Map& map, const WindowBundleAdjustm
   }
   WindowBundleInput input;
   input.focal_length_px = focal_length_px;
-  input.map_version = map.version();
   const std::size_t n = std::min<std::size_t>(params.window_size, map.numKeyframes());
   auto first = map.keyframes().end();
   std::advance(first, -static_cast<long>(n));
@@ -182,7 +181,6 @@ WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
   }
 
   WindowBundleResult result;
-  result.map_version = input.map_version;
   BundleStatistics& stats = result.statistics;
   if (any_free && !costs.empty()) {
     ceres::Solver::Options options;

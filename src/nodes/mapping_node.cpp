@@ -83,7 +83,12 @@ class MappingNode {
       const double ms = (ros::WallTime::now() - start).toSec() * 1e3;
       last_stamp_ = msg->header.stamp;
       publishUpdate(update);
-      ROS_DEBUG("keyframe %u: window BA %.1f ms", msg->id, ms);
+      ROS_DEBUG(
+          "keyframe %u: added in %.1f ms, window BA %.1f ms (%d iterations, RMS %.2f -> %.2f "
+          "px, %zu of %zu observations inliers)%s%s",
+          msg->id, ms, statistics.time_ms, statistics.iterations, statistics.initial_rmse_px,
+          statistics.final_rmse_px, statistics.num_inliers, statistics.num_observations,
+          statistics.message.empty() ? "" : ": ", statistics.message.c_str());
       if (mapper_->map().numKeyframes() % 20 == 0) {
         ROS_INFO("map: %zu keyframes, %zu points (keyframe %u, window BA %.1f ms)",
                  mapper_->map().numKeyframes(), mapper_->map().numPoints(), msg->id, ms);

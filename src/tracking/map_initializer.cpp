@@ -1,6 +1,7 @@
 #include "scale_drift_slam/tracking/map_initializer.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
 
 #include "scale_drift_slam/common/statistics.h"
@@ -115,16 +116,16 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const Image
     return std::nullopt;
   }
   map.first_timestamp = reference_timestamp_;
-  map.second_timestamp = timestamp;
   map.T_second_first = result.T_second_first;
   map.p_first = std::move(result.points_first);
   map.triangulated = std::move(result.triangulated);
   map.first_image = reference_image_;
-  map.second_image = image;
   map.used_homography = result.used_homography;
-  map.median_parallax_deg = result.median_parallax_deg;
+  char parallax[32];
+  std::snprintf(parallax, sizeof(parallax), "%.1f", result.median_parallax_deg);
   status_ = "initialised from " + std::to_string(result.num_triangulated) + " points (" +
-            (result.used_homography ? "homography" : "essential matrix") + ")";
+            (result.used_homography ? "homography" : "essential matrix") + ", median parallax " +
+            parallax + " deg)";
   reset();
   return map;
 }

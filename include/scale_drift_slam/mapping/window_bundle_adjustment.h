@@ -60,8 +60,7 @@ struct WindowBundleInput {
   std::vector<BundleKeyframe> keyframes;
   std::vector<BundlePoint> points;
   std::vector<BundleObservation> observations;
-  double focal_length_px = 0.0;   ///< Scales normalised residuals to pixels.
-  std::uint64_t map_version = 0;  ///< The map version the snapshot was taken at.
+  double focal_length_px = 0.0;  ///< Scales normalised residuals to pixels.
   /// Throws std::invalid_argument for bad indices, a non-positive focal length, non-finite values.
   void validate() const;
 };
@@ -84,7 +83,6 @@ struct WindowBundleResult {
   std::vector<BundlePoint> points;        ///< Same order as the input.
   std::vector<bool> inlier;               ///< Per input observation.
   BundleStatistics statistics;
-  std::uint64_t map_version = 0;  ///< Copied from the input.
 };
 
 /// Builds the window from the map: the newest `window_size` keyframes (by id), the two

@@ -36,15 +36,13 @@ struct InitializerParams {
 /// `triangulated`) the point.
 struct InitialMap {
   double first_timestamp = 0.0;
-  double second_timestamp = 0.0;
   geometry::SE3 T_second_first;
   std::vector<Eigen::Vector2d> px_first, px_second;
   std::vector<Eigen::Vector2d> xy_first, xy_second;
   std::vector<Eigen::Vector3d> p_first;
   std::vector<bool> triangulated;
-  ImagePyramid first_image, second_image;
+  ImagePyramid first_image;
   bool used_homography = false;
-  double median_parallax_deg = 0.0;
 };
 
 class MapInitializer {
