@@ -63,9 +63,8 @@ const char* const kUsage =
     "        --max-iterations N     LM iterations of each pose graph (default 100)\n";
 
 int runKeble(const CommandLine& args) {
-  args.rejectUnknownFlags(
-      {"map", "out", "max-iterations", "jacobians", "structure-iterations", "covisibility",
-       "loop-error-passes"});
+  args.rejectUnknownFlags({"map", "out", "max-iterations", "jacobians", "structure-iterations",
+                           "covisibility", "loop-error-passes"});
   sds::sim::KebleExperimentOptions options;
   options.graph.max_iterations = static_cast<int>(args.integer("max-iterations", 100));
   options.graph.loop_error_passes = static_cast<int>(
