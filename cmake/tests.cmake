@@ -38,6 +38,12 @@ add_test(NAME core_is_ros_free
                  -P ${PROJECT_SOURCE_DIR}/cmake/check_core_ros_free.cmake)
 set_tests_properties(core_is_ros_free PROPERTIES LABELS "core")
 
+# One-way layering of the modules (doc/architecture.md): no include goes up.
+add_test(NAME layering
+         COMMAND ${CMAKE_COMMAND} -DSOURCE_DIR=${PROJECT_SOURCE_DIR}
+                 -P ${PROJECT_SOURCE_DIR}/cmake/check_layering.cmake)
+set_tests_properties(layering PROPERTIES LABELS "core")
+
 # ROS-layer tests (gtest without a master) and integration tests (rostest).
 file(GLOB ros_test_sources CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/test/ros/*.cpp)
 if(ros_test_sources)

@@ -16,7 +16,7 @@
 namespace scale_drift_slam::io {
 namespace {
 
-using mapping::SlamParams;
+using system::SlamParams;
 
 /// A named parameter: where it lives in the struct and how to read/print it.
 struct Field {
@@ -27,7 +27,7 @@ struct Field {
   std::function<std::string()> print_text = nullptr;
 };
 
-std::vector<Field> fieldsOf(SlamParams& p) {
+std::vector<Field> fieldsOf(system::SlamParams& p) {
   auto& t = p.tracker;
   auto& l = p.loop;
   auto& v = p.loop.verification;
@@ -164,16 +164,16 @@ std::vector<Field> fieldsOf(SlamParams& p) {
   Field solver{"motion_ba", "solver", static_cast<int*>(nullptr)};
   solver.parse_text = [&t](const std::string& s) {
     if (s == "hand_written") {
-      t.motion_ba.solver = mapping::MotionOnlySolver::kHandWritten;
+      t.motion_ba.solver = features::MotionOnlySolver::kHandWritten;
     } else if (s == "ceres") {
-      t.motion_ba.solver = mapping::MotionOnlySolver::kCeres;
+      t.motion_ba.solver = features::MotionOnlySolver::kCeres;
     } else {
       throw std::invalid_argument("unknown solver '" + s + "' (accepted: hand_written, ceres)");
     }
   };
   solver.print_text = [&t] {
-    return std::string(t.motion_ba.solver == mapping::MotionOnlySolver::kCeres ? "ceres"
-                                                                               : "hand_written");
+    return std::string(t.motion_ba.solver == features::MotionOnlySolver::kCeres ? "ceres"
+                                                                                : "hand_written");
   };
   const auto candidates_section = std::find_if(
       f.begin(), f.end(), [](const Field& field) { return field.section == "candidates"; });
@@ -206,8 +206,8 @@ void readField(const Field& field, const YAML::Node& node, const std::string& or
 
 }  // namespace
 
-SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
-  SlamParams params;
+system::SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
+  system::SlamParams params;
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -248,7 +248,7 @@ SlamParams parseSlamParams(const std::string& text, const std::string& origin) {
   return params;
 }
 
-SlamParams loadSlamParams(const std::string& path) {
+system::SlamParams loadSlamParams(const std::string& path) {
   std::ifstream file(path);
   if (!file) fail("'" + path + "'", "cannot open the file");
   std::stringstream text;
@@ -256,8 +256,8 @@ SlamParams loadSlamParams(const std::string& path) {
   return parseSlamParams(text.str(), "'" + path + "'");
 }
 
-std::string formatSlamParams(const SlamParams& params_in) {
-  SlamParams params = params_in;
+std::string formatSlamParams(const system::SlamParams& params_in) {
+  system::SlamParams params = params_in;
   std::ostringstream out;
   out.precision(10);
   std::string section;

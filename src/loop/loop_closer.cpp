@@ -96,7 +96,7 @@ VerificationView LoopCloser::viewOf(map::KeyframeId id, const KeyframeAppearance
     view.point_xy.push_back(o.xy);
     view.point_camera.push_back(p_cam);
   }
-  if (!image.empty()) view.image = tracking::buildPyramid(image, pyramid_levels_);
+  if (!image.empty()) view.image = features::buildPyramid(image, pyramid_levels_);
   return view;
 }
 
@@ -184,7 +184,7 @@ map::RelocalisationAnswer LoopCloser::relocalise(const map::RelocalisationReques
   }
   VerificationView current;  // a frame: no map points of its own
   current.features = &features;
-  current.image = tracking::buildPyramid(request.image, pyramid_levels_);
+  current.image = features::buildPyramid(request.image, pyramid_levels_);
   for (const LoopCandidate& place : places) {
     const std::string prefix = "keyframe " + std::to_string(place.keyframe_id) + ": ";
     if (!place.geometry.passed) {

@@ -96,15 +96,15 @@ LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
   }
 
   // Robust refinement on all matches, the loop keyframe's frame playing the world.
-  mapping::MotionOnlyInput refine;
+  features::MotionOnlyInput refine;
   refine.T_cam_world_guess = T_ransac;
   refine.focal_length_px = input.focal_length_px;
   for (const Match2D3D& m : input.matches)
     refine.observations.push_back({m.p_loop, m.xy_current});
-  mapping::MotionOnlyBundleAdjustmentParams refine_params = params.refinement;
+  features::MotionOnlyBundleAdjustmentParams refine_params = params.refinement;
   refine_params.inlier_threshold_px = params.ransac_threshold_px;
-  const mapping::MotionOnlyResult refined =
-      mapping::solveMotionOnlyBundleAdjustment(refine, refine_params);
+  const features::MotionOnlyResult refined =
+      features::solveMotionOnlyBundleAdjustment(refine, refine_params);
   c.T_current_loop = refined.T_cam_world;
   if (!c.T_current_loop.translation().allFinite() ||
       !c.T_current_loop.rotation().coeffs().allFinite()) {

@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "scale_drift_slam/common/statistics.h"
-#include "scale_drift_slam/tracking/feature_detection.h"
+#include "scale_drift_slam/features/feature_detection.h"
 
 namespace scale_drift_slam::loop {
 
@@ -91,7 +91,7 @@ LoopConstraintInput matchesWithDepth(const VerificationView& current,
 /// A candidate map point found in the current image by the patch search.
 struct FoundPoint {
   std::size_t candidate_index = 0;  ///< Into the candidate view's point arrays.
-  tracking::SearchMatch match;
+  features::SearchMatch match;
 };
 
 struct CandidateSearch {
@@ -105,14 +105,14 @@ CandidateSearch searchCandidatePoints(const VerificationView& current,
                                       const geometry::SE3& T_current_loop,
                                       const geometry::CameraModel& camera,
                                       const LoopVerificationParams& params) {
-  std::vector<tracking::PointAppearance> patches;
+  std::vector<features::PointAppearance> patches;
   patches.reserve(candidate.point_ids.size());
-  std::vector<tracking::SearchPoint> points;
+  std::vector<features::SearchPoint> points;
   std::vector<std::size_t> point_index;  // into the candidate view, per search point
   std::vector<double> depths;
   for (std::size_t i = 0; i < candidate.point_ids.size(); ++i) {
     const std::optional<Eigen::Vector2d> px = camera.project(candidate.point_camera[i]);
-    tracking::PointAppearance patch;
+    features::PointAppearance patch;
     if (!px || !patch.cut(candidate.image, *px)) continue;
     patches.push_back(std::move(patch));
     points.push_back({candidate.point_camera[i], geometry::SE3(), &patches.back()});
@@ -127,9 +127,9 @@ CandidateSearch searchCandidatePoints(const VerificationView& current,
   Sigma.diagonal().head<3>().setConstant(params.search_rotation_sigma *
                                          params.search_rotation_sigma);
   Sigma.diagonal().tail<3>().setConstant(translation_sigma * translation_sigma);
-  const tracking::CornerGrid corners =
-      tracking::detectSearchCorners(current.image.base(), params.search);
-  const std::vector<tracking::SearchMatch> matches = tracking::activeSearch(
+  const features::CornerGrid corners =
+      features::detectSearchCorners(current.image.base(), params.search);
+  const std::vector<features::SearchMatch> matches = features::activeSearch(
       points, T_current_loop, Sigma, camera, current.image, corners, params.search);
   for (std::size_t k = 0; k < matches.size(); ++k) {
     search.searched += matches[k].searched;

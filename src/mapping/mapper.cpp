@@ -48,12 +48,13 @@ Mapper::Mapper(const MapperParams& params, double focal_length_px)
     throw std::invalid_argument("mapper needs a positive focal length");
 }
 
-map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics) {
+map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
+                                   features::BundleStatistics* statistics) {
   corrections_.bringUpToDate(message);
   map::addKeyframeMessage(message, map_);
 
   map::MapUpdate update;
-  if (statistics) *statistics = BundleStatistics{};
+  if (statistics) *statistics = features::BundleStatistics{};
   const bool enough = static_cast<int>(map_.numKeyframes()) > params_.window.num_fixed_keyframes;
   if (params_.run_window_ba && enough) {
     const WindowBundleInput input = makeWindowInput(map_, params_.window, focal_length_px_);

@@ -13,7 +13,7 @@
 
 #include "scale_drift_slam/common/stopwatch.h"
 
-#include "reprojection_cost.h"
+#include "scale_drift_slam/features/reprojection_cost.h"
 
 namespace scale_drift_slam::mapping {
 
@@ -111,7 +111,7 @@ std::vector<double> pixelErrors(const WindowBundleInput& input,
   for (std::size_t i = 0; i < input.observations.size(); ++i) {
     const BundleObservation& o = input.observations[i];
     Eigen::Vector2d r;
-    errors[i] = internal::reprojectionResidual(
+    errors[i] = features::reprojectionResidual(
                     geometry::SE3::fromData(poses[o.keyframe_index].data()), points[o.point_index],
                     o.xy, input.focal_length_px, &r, nullptr, nullptr)
                     ? r.norm()
@@ -123,7 +123,7 @@ std::vector<double> pixelErrors(const WindowBundleInput& input,
 double robustCost(const std::vector<double>& errors, double width) {
   double cost = 0.0;
   for (double e : errors) {
-    if (std::isfinite(e)) cost += internal::pseudoHuber(e * e, width);
+    if (std::isfinite(e)) cost += features::pseudoHuber(e * e, width);
   }
   return cost;
 }
@@ -151,9 +151,9 @@ WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::SoftLOneLoss pseudo_huber(params.huber_width_px);  // see internal::pseudoHuber
-  internal::SE3LeftManifold se3_manifold;
-  std::deque<internal::ReprojectionCost> costs;  // stable addresses, no copies
+  ceres::SoftLOneLoss pseudo_huber(params.huber_width_px);  // see features::pseudoHuber
+  features::SE3LeftManifold se3_manifold;
+  std::deque<features::ReprojectionCost> costs;  // stable addresses, no copies
   std::vector<bool> pose_used(poses.size(), false), point_used(points.size(), false);
   for (std::size_t i = 0; i < input.observations.size(); ++i) {
     if (!std::isfinite(initial_errors[i])) continue;
@@ -181,7 +181,7 @@ WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
   }
 
   WindowBundleResult result;
-  BundleStatistics& stats = result.statistics;
+  features::BundleStatistics& stats = result.statistics;
   if (any_free && !costs.empty()) {
     ceres::Solver::Options options;
     options.linear_solver_type = ceres::SPARSE_SCHUR;

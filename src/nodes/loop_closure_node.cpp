@@ -1,5 +1,5 @@
 // loop_closure_node: loop detection and relocalisation as a ROS node (doc/ros.md). A thin adapter
-// over the core's loop::LoopCloser, exactly as mapping::SlamSystem's loop thread drives it
+// over the core's loop::LoopCloser, exactly as system::SlamSystem's loop thread drives it
 // offline: Keyframes (tracking node) and MapUpdates (mapping node) keep its copy of the map; for
 // every keyframe it runs place recognition and, for an accepted candidate, loop verification, and
 // publishes a verified loop as a Sim3Constraint for the mapping node; it answers the tracking
@@ -16,8 +16,8 @@
 #include <ros/ros.h>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/common/message_queue.h"
 #include "scale_drift_slam/loop/loop_closer.h"
-#include "scale_drift_slam/map/message_queue.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/map_versions.h"
 #include "scale_drift_slam/ros/node_params.h"
@@ -48,7 +48,7 @@ using Input = std::variant<KeyframeInput, UpdateInput, RequestInput>;
 
 class LoopClosureNode {
  public:
-  LoopClosureNode(ros::NodeHandle& nh, ros_params::LoopClosureNodeConfig config)
+  LoopClosureNode(ros::NodeHandle& nh, ros_conversions::LoopClosureNodeConfig config)
       : config_(std::move(config)) {
     keyframe_sub_ = nh.subscribe("keyframes", config_.node.keyframe_queue_size,
                                  &LoopClosureNode::onKeyframe, this);
@@ -246,10 +246,10 @@ class LoopClosureNode {
     answer_pub_.publish(out);
   }
 
-  ros_params::LoopClosureNodeConfig config_;
+  ros_conversions::LoopClosureNodeConfig config_;
   ros::Subscriber keyframe_sub_, update_sub_, request_sub_;
   ros::Publisher constraint_pub_, answer_pub_;
-  map::MessageQueue<Input> inbox_;
+  common::MessageQueue<Input> inbox_;
   // The worker's:
   std::unique_ptr<loop::LoopCloser> closer_;  ///< Made at a session's first keyframe.
   std::uint32_t session_ = 0;
@@ -262,14 +262,14 @@ class LoopClosureNode {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "loop_closure_node");
   ros::NodeHandle nh, pnh("~");
-  ros_params::LoopClosureNodeConfig config;
+  ros_conversions::LoopClosureNodeConfig config;
   try {
-    config = ros_params::loopClosureNodeConfig(ros_params::privateParams(pnh));
+    config = ros_conversions::loopClosureNodeConfig(ros_conversions::privateParams(pnh));
   } catch (const std::exception& e) {
     ROS_FATAL("loop_closure_node: invalid parameter, not starting: %s", e.what());
     return 1;
   }
-  ROS_INFO("loop_closure_node parameters:\n%s", ros_params::describe(config).c_str());
+  ROS_INFO("loop_closure_node parameters:\n%s", ros_conversions::describe(config).c_str());
   for (const std::string& name : config.unknown)
     ROS_WARN("unknown parameter %s is ignored", name.c_str());
   cv::setNumThreads(1);  // the worker's OpenCV calls stay on its thread

@@ -28,10 +28,10 @@ using namespace scale_drift_slam;
 
 class MappingNode {
  public:
-  MappingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, ros_params::MappingNodeConfig config)
+  MappingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, ros_conversions::MappingNodeConfig config)
       : config_(std::move(config)),
         params_(config_.node),
-        T_map_world_(ros_frames::mapFromWorld(params_.map_z_up)) {
+        T_map_world_(ros_conversions::mapFromWorld(params_.map_z_up)) {
     keyframe_sub_ =
         nh.subscribe("keyframes", params_.keyframe_queue_size, &MappingNode::onKeyframe, this);
     constraint_sub_ = nh.subscribe("loop_constraints", 10, &MappingNode::onLoopConstraint, this);
@@ -53,8 +53,8 @@ class MappingNode {
     std_msgs::Header header;
     header.stamp = last_stamp_;
     header.frame_id = params_.map_frame;
-    cloud_pub_.publish(ros_visualization::mapCloud(map::Map(), T_map_world_, header));
-    marker_pub_.publish(ros_visualization::deleteAllMarkers(header));
+    cloud_pub_.publish(ros_conversions::mapCloud(map::Map(), T_map_world_, header));
+    marker_pub_.publish(ros_conversions::deleteAllMarkers(header));
   }
 
   void onKeyframe(const scale_drift_slam::KeyframeConstPtr& msg) {
@@ -77,7 +77,7 @@ class MappingNode {
       }
       std::string image_problem;  // the mapper needs no image: a bad one is not its business
       const map::KeyframeMessage keyframe = ros_conversions::fromKeyframeMsg(*msg, &image_problem);
-      mapping::BundleStatistics statistics;
+      features::BundleStatistics statistics;
       const ros::WallTime start = ros::WallTime::now();
       const map::MapUpdate update = mapper_->addKeyframe(keyframe, &statistics);
       const double ms = (ros::WallTime::now() - start).toSec() * 1e3;
@@ -149,12 +149,12 @@ class MappingNode {
     std_msgs::Header header;
     header.stamp = last_stamp_;
     header.frame_id = params_.map_frame;
-    cloud_pub_.publish(ros_visualization::mapCloud(mapper_->map(), T_map_world_, header));
+    cloud_pub_.publish(ros_conversions::mapCloud(mapper_->map(), T_map_world_, header));
     std::vector<std::pair<map::KeyframeId, map::KeyframeId>> loops;
     for (const loop::PoseGraphEdge& edge : mapper_->loopEdges())
       loops.emplace_back(edge.from, edge.to);
-    marker_pub_.publish(ros_visualization::keyframeMarkers(mapper_->map(), loops, T_map_world_,
-                                                           header, params_.marker_scale));
+    marker_pub_.publish(ros_conversions::keyframeMarkers(mapper_->map(), loops, T_map_world_,
+                                                         header, params_.marker_scale));
   }
 
   bool onSaveTrajectory(scale_drift_slam::SaveTrajectory::Request& request,
@@ -189,8 +189,8 @@ class MappingNode {
     return true;
   }
 
-  ros_params::MappingNodeConfig config_;
-  const ros_params::MappingNodeParams& params_;
+  ros_conversions::MappingNodeConfig config_;
+  const ros_conversions::MappingNodeParams& params_;
   geometry::SE3 T_map_world_;
   ros::Subscriber keyframe_sub_, constraint_sub_;
   ros::Publisher update_pub_, cloud_pub_, marker_pub_;
@@ -208,14 +208,14 @@ class MappingNode {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "mapping_node");
   ros::NodeHandle nh, pnh("~");
-  ros_params::MappingNodeConfig config;
+  ros_conversions::MappingNodeConfig config;
   try {
-    config = ros_params::mappingNodeConfig(ros_params::privateParams(pnh));
+    config = ros_conversions::mappingNodeConfig(ros_conversions::privateParams(pnh));
   } catch (const std::exception& e) {
     ROS_FATAL("mapping_node: invalid parameter, not starting: %s", e.what());
     return 1;
   }
-  ROS_INFO("mapping_node parameters:\n%s", ros_params::describe(config).c_str());
+  ROS_INFO("mapping_node parameters:\n%s", ros_conversions::describe(config).c_str());
   for (const std::string& name : config.unknown)
     ROS_WARN("unknown parameter %s is ignored", name.c_str());
   MappingNode node(nh, pnh, std::move(config));

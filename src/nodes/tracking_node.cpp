@@ -4,8 +4,8 @@
 // optical), nav_msgs/Odometry and Path (corrected by loop closures), TrackingStatus, a debug
 // image, every new Keyframe and, when lost, RelocalisationRequests. MapUpdates (mapping node) and
 // RelocalisationAnswers (loop-closure node) arrive on their own callback queue and thread and wait
-// in a map::MessageQueue that the image callback drains before each frame, as
-// mapping::SlamSystem does offline: the camera never waits for the other nodes. Images and
+// in a common::MessageQueue that the image callback drains before each frame, as
+// system::SlamSystem does offline: the camera never waits for the other nodes. Images and
 // services run on the main thread.
 
 #include <random>
@@ -34,7 +34,8 @@ using namespace scale_drift_slam;
 
 class TrackingNode {
  public:
-  TrackingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, ros_params::TrackingNodeConfig config)
+  TrackingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh,
+               ros_conversions::TrackingNodeConfig config)
       : config_(std::move(config)), params_(config_.node), it_(nh), odom_(params_.map_z_up) {
     session_ = newSession();
     if (config_.calibration) setCamera(*config_.calibration);
@@ -63,7 +64,7 @@ class TrackingNode {
     reset_srv_ = pnh.advertiseService("reset", &TrackingNode::onReset, this);
     if (params_.publish_optical_transform) {
       static_broadcaster_.sendTransform(
-          ros_conversions::toTransformStampedMsg(ros_frames::bodyFromOptical(), ros::Time(0),
+          ros_conversions::toTransformStampedMsg(ros_conversions::bodyFromOptical(), ros::Time(0),
                                                  params_.frames.camera, params_.frames.optical));
     }
     update_spinner_.start();
@@ -242,15 +243,15 @@ class TrackingNode {
     if (debug_pub_.getNumSubscribers() > 0 && !result.rejected) {
       std_msgs::Header debug_header = header;
       debug_header.frame_id = params_.frames.optical;
-      const cv::Mat grey = tracking::toGrey(image.image, image.encoding);
+      const cv::Mat grey = features::toGrey(image.image, image.encoding);
       debug_pub_.publish(
-          ros_conversions::toBgr8Msg(ros_visualization::debugImage(grey, result), debug_header));
+          ros_conversions::toBgr8Msg(ros_conversions::debugImage(grey, result), debug_header));
     }
   }
 
   void publishPose(const ros::Time& stamp, const geometry::SE3& T_cam_world) {
-    const ros_frames::CameraTransforms t = odom_.transforms(T_cam_world);
-    const ros_params::FrameNames& f = params_.frames;
+    const ros_conversions::CameraTransforms t = odom_.transforms(T_cam_world);
+    const ros_conversions::FrameNames& f = params_.frames;
     broadcaster_.sendTransform(
         {ros_conversions::toTransformStampedMsg(t.T_map_odom, stamp, f.map, f.odom),
          ros_conversions::toTransformStampedMsg(t.T_odom_body, stamp, f.odom, f.camera)});
@@ -301,8 +302,8 @@ class TrackingNode {
     return true;
   }
 
-  ros_params::TrackingNodeConfig config_;
-  const ros_params::TrackingNodeParams& params_;
+  ros_conversions::TrackingNodeConfig config_;
+  const ros_conversions::TrackingNodeParams& params_;
   ros::CallbackQueue update_queue_;  // outlives the subscription that uses it
   image_transport::ImageTransport it_;
   image_transport::Subscriber image_sub_;
@@ -320,11 +321,11 @@ class TrackingNode {
   std::unique_ptr<tracking::Tracker> tracker_;
   std::uint32_t session_ = 0;
   ros_conversions::TrackerInbox inbox_;  ///< Map updates and relocalisation answers.
-  ros_frames::OdomFrame odom_;
+  ros_conversions::OdomFrame odom_;
   ros::Time last_stamp_;
   std::optional<tracking::TrackingState> last_state_;
-  ros_visualization::CameraPath path_{odom_.mapFromWorld(), params_.frames.map,
-                                      static_cast<std::size_t>(params_.path_max_poses)};
+  ros_conversions::CameraPath path_{odom_.mapFromWorld(), params_.frames.map,
+                                    static_cast<std::size_t>(params_.path_max_poses)};
   int frames_since_path_ = 0;
   ros::AsyncSpinner update_spinner_{1, &update_queue_};  // map updates and answers
 };
@@ -334,14 +335,14 @@ class TrackingNode {
 int main(int argc, char** argv) {
   ros::init(argc, argv, "tracking_node");
   ros::NodeHandle nh, pnh("~");
-  ros_params::TrackingNodeConfig config;
+  ros_conversions::TrackingNodeConfig config;
   try {
-    config = ros_params::trackingNodeConfig(ros_params::privateParams(pnh));
+    config = ros_conversions::trackingNodeConfig(ros_conversions::privateParams(pnh));
   } catch (const std::exception& e) {
     ROS_FATAL("tracking_node: invalid parameter, not starting: %s", e.what());
     return 1;
   }
-  ROS_INFO("tracking_node parameters:\n%s", ros_params::describe(config).c_str());
+  ROS_INFO("tracking_node parameters:\n%s", ros_conversions::describe(config).c_str());
   for (const std::string& name : config.unknown)
     ROS_WARN("unknown parameter %s is ignored", name.c_str());
   cv::setNumThreads(1);  // one core for tracking; the mapping node has the other

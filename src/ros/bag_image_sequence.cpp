@@ -12,7 +12,7 @@
 
 #include "scale_drift_slam/ros/conversions.h"
 
-namespace scale_drift_slam::ros_bag {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 class BagImageSequence : public io::ImageSequence {
@@ -97,4 +97,4 @@ std::unique_ptr<io::ImageSequence> openBagImageSequence(const std::string& path,
   return std::make_unique<BagImageSequence>(path, image_topic, camera_info_topic);
 }
 
-}  // namespace scale_drift_slam::ros_bag
+}  // namespace scale_drift_slam::ros_conversions

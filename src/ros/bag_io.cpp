@@ -16,7 +16,7 @@
 
 #include "scale_drift_slam/ros/conversions.h"
 
-namespace scale_drift_slam::ros_bag {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 ros::Time toRosTime(std::int64_t stamp_ns) {
@@ -187,4 +187,4 @@ std::vector<io::StampedPose> readBagPoses(const std::string& path, const std::st
   return poses;
 }
 
-}  // namespace scale_drift_slam::ros_bag
+}  // namespace scale_drift_slam::ros_conversions

@@ -2,7 +2,7 @@
 
 #include <Eigen/Core>
 
-namespace scale_drift_slam::ros_frames {
+namespace scale_drift_slam::ros_conversions {
 
 geometry::SE3 bodyFromOptical() {
   Eigen::Matrix3d R_body_optical;
@@ -29,4 +29,4 @@ CameraTransforms OdomFrame::transforms(const geometry::SE3& T_cam_world) const {
   return t;
 }
 
-}  // namespace scale_drift_slam::ros_frames
+}  // namespace scale_drift_slam::ros_conversions

@@ -9,17 +9,17 @@
 namespace scale_drift_slam::ros_conversions {
 namespace {
 
-int matTypeOf(tracking::PixelEncoding encoding) {
+int matTypeOf(features::PixelEncoding encoding) {
   switch (encoding) {
-    case tracking::PixelEncoding::kMono8:
+    case features::PixelEncoding::kMono8:
       return CV_8UC1;
-    case tracking::PixelEncoding::kMono16:
+    case features::PixelEncoding::kMono16:
       return CV_16UC1;
-    case tracking::PixelEncoding::kBgr8:
-    case tracking::PixelEncoding::kRgb8:
+    case features::PixelEncoding::kBgr8:
+    case features::PixelEncoding::kRgb8:
       return CV_8UC3;
-    case tracking::PixelEncoding::kBgra8:
-    case tracking::PixelEncoding::kRgba8:
+    case features::PixelEncoding::kBgra8:
+    case features::PixelEncoding::kRgba8:
       return CV_8UC4;
   }
   return CV_8UC1;
@@ -56,7 +56,7 @@ cv::Mat copyPixels(const sensor_msgs::Image& msg, int type) {
 
 CameraImage cameraImageFromMsg(const sensor_msgs::Image& msg) {
   CameraImage result;
-  result.encoding = tracking::parsePixelEncoding(msg.encoding);  // names the accepted ones
+  result.encoding = features::parsePixelEncoding(msg.encoding);  // names the accepted ones
   result.image = copyPixels(msg, matTypeOf(result.encoding));
   return result;
 }
@@ -68,7 +68,7 @@ CameraImage cameraImageFromMsg(const sensor_msgs::CompressedImage& msg) {
     throw std::invalid_argument("compressed image (format '" + msg.format + "', " +
                                 std::to_string(msg.data.size()) + " bytes) cannot be decoded");
   }
-  result.encoding = tracking::encodingOfMat(result.image);
+  result.encoding = features::encodingOfMat(result.image);
   return result;
 }
 

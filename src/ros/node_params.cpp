@@ -12,7 +12,7 @@
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/slam_params_io.h"
 
-namespace scale_drift_slam::ros_params {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 using XmlRpc::XmlRpcValue;
@@ -100,7 +100,7 @@ const char* const kPlaceRecognition = "place_recognition";
 /// system, place_recognition).
 std::set<std::string> slamSections() {
   std::set<std::string> sections = {kPlaceRecognition};
-  const mapping::SlamParams default_params;  // a named object: no maybe-uninitialized warning
+  const system::SlamParams default_params;  // a named object: no maybe-uninitialized warning
   const YAML::Node defaults = YAML::Load(io::formatSlamParams(default_params));
   for (const auto& entry : defaults)
     sections.insert(entry.first.as<std::string>());
@@ -193,7 +193,7 @@ void LoopClosureNodeParams::validate() const {
   check(keyframe_queue_size >= 1, "keyframe_queue_size", "must be >= 1");
 }
 
-mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params) {
+system::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params) {
   XmlRpcValue params = private_params;
   std::string config_file;
   Reader(params).read("config", &config_file);
@@ -343,4 +343,4 @@ std::string describe(const LoopClosureNodeConfig& c) {
   return out.str();
 }
 
-}  // namespace scale_drift_slam::ros_params
+}  // namespace scale_drift_slam::ros_conversions

@@ -8,7 +8,7 @@
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/frames.h"
 
-namespace scale_drift_slam::ros_visualization {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
@@ -118,7 +118,7 @@ visualization_msgs::MarkerArray keyframeMarkers(
 geometry_msgs::PoseStamped pathPose(const geometry::SE3& T_cam_world, double timestamp,
                                     const geometry::SE3& T_map_world,
                                     const std::string& map_frame) {
-  static const geometry::SE3 T_optical_body = ros_frames::bodyFromOptical().inverse();
+  static const geometry::SE3 T_optical_body = ros_conversions::bodyFromOptical().inverse();
   geometry_msgs::PoseStamped pose;
   pose.header.stamp = ros::Time(timestamp);
   pose.header.frame_id = map_frame;
@@ -192,4 +192,4 @@ cv::Mat debugImage(const cv::Mat& grey, const tracking::FrameResult& result) {
   return image;
 }
 
-}  // namespace scale_drift_slam::ros_visualization
+}  // namespace scale_drift_slam::ros_conversions

@@ -69,7 +69,7 @@ geometry::SE3 SimulatedVisualOdometry::predictPose() const {
 std::vector<SimulatedVisualOdometry::Tracked> SimulatedVisualOdometry::track(
     const std::vector<Measurement>& measurements, geometry::SE3* pose) {
   std::vector<Tracked> tracked;
-  mapping::MotionOnlyInput input;
+  features::MotionOnlyInput input;
   input.T_cam_world_guess = *pose;
   input.focal_length_px = camera_.focal_length;
   for (const Measurement& m : measurements) {
@@ -83,8 +83,8 @@ std::vector<SimulatedVisualOdometry::Tracked> SimulatedVisualOdometry::track(
     return tracked;
   }
   const common::Stopwatch timer;
-  const mapping::MotionOnlyResult result =
-      mapping::solveMotionOnlyBundleAdjustment(input, params_.motion);
+  const features::MotionOnlyResult result =
+      features::solveMotionOnlyBundleAdjustment(input, params_.motion);
   stats_.motion_ba_ms += timer.ms();
   *pose = result.T_cam_world;
   std::vector<Tracked> inliers;

@@ -101,9 +101,10 @@ int run(const sds::io::CommandLine& cl) {
   sds::sim::SequenceRenderer renderer(params);
   const double build_s = timer.seconds();
   sds::sim::TumSequenceWriter folder(out, renderer.calibration(), renderer.scenario().description);
-  std::unique_ptr<sds::ros_bag::SequenceBagWriter> bag;
+  std::unique_ptr<sds::ros_conversions::SequenceBagWriter> bag;
   if (const auto bag_path = cl.value("bag")) {
-    bag = std::make_unique<sds::ros_bag::SequenceBagWriter>(*bag_path, renderer.calibration());
+    bag = std::make_unique<sds::ros_conversions::SequenceBagWriter>(*bag_path,
+                                                                    renderer.calibration());
   }
   const int n = renderer.frameCount();
   for (int i = 0; i < n; ++i) {

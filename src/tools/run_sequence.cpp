@@ -23,8 +23,8 @@
 #include "scale_drift_slam/io/run_statistics.h"
 #include "scale_drift_slam/io/slam_params_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
-#include "scale_drift_slam/mapping/slam_system.h"
 #include "scale_drift_slam/ros/bag_image_sequence.h"
+#include "scale_drift_slam/system/slam_system.h"
 
 namespace {
 
@@ -53,8 +53,9 @@ calib.txt) or a rosbag (*.bag).
 std::unique_ptr<io::ImageSequence> openDataset(const io::CommandLine& args,
                                                const std::string& dataset) {
   if (fs::path(dataset).extension() == ".bag") {
-    return ros_bag::openBagImageSequence(dataset, args.text("topic", "/camera/image_raw"),
-                                         args.text("camera-info-topic", "/camera/camera_info"));
+    return ros_conversions::openBagImageSequence(
+        dataset, args.text("topic", "/camera/image_raw"),
+        args.text("camera-info-topic", "/camera/camera_info"));
   }
   return io::openImageFolder(dataset);
 }
@@ -76,11 +77,11 @@ std::vector<io::StampedPose> keyframePoses(const map::Map& map) {
   return poses;
 }
 
-tracking::FrameResult processOne(mapping::SlamSystem& slam, const io::SequenceFrame& frame) {
+tracking::FrameResult processOne(system::SlamSystem& slam, const io::SequenceFrame& frame) {
   try {
-    const tracking::PixelEncoding encoding = frame.encoding.empty()
-                                                 ? tracking::encodingOfMat(frame.image)
-                                                 : tracking::parsePixelEncoding(frame.encoding);
+    const features::PixelEncoding encoding = frame.encoding.empty()
+                                                 ? features::encodingOfMat(frame.image)
+                                                 : features::parsePixelEncoding(frame.encoding);
     return slam.processFrame(frame.timestamp, frame.image, encoding);
   } catch (const std::invalid_argument& e) {  // empty or unsupported image: skip the frame
     tracking::FrameResult r;
@@ -102,15 +103,15 @@ void addTimes(const tracking::FrameResult& r, io::StageTimings* timings) {
   timings->add("tracking_cpu", r.times.cpu);
 }
 
-std::vector<io::StampedPose> correctedTrajectory(const mapping::SlamSystem& slam) {
+std::vector<io::StampedPose> correctedTrajectory(const system::SlamSystem& slam) {
   std::vector<io::StampedPose> poses;
   for (const map::CorrectedTrajectory::Frame& frame : slam.trajectory().frames())
     poses.push_back({frame.timestamp, frame.T_cam_world.inverse()});
   return poses;
 }
 
-void addBackgroundTimes(const mapping::SlamSystem& slam, io::StageTimings* timings) {
-  const mapping::BackgroundTimes times = slam.backgroundTimes();
+void addBackgroundTimes(const system::SlamSystem& slam, io::StageTimings* timings) {
+  const system::BackgroundTimes times = slam.backgroundTimes();
   for (const double ms : times.window_ba_ms)
     timings->add("window_ba", ms);
   for (const double ms : times.place_recognition_ms)
@@ -125,7 +126,7 @@ void addBackgroundTimes(const mapping::SlamSystem& slam, io::StageTimings* timin
 }
 
 /// The loops applied: keyframe ids, inliers, the measured scale and the correction's figures.
-nlohmann::json loopsJson(const mapping::SlamSystem& slam) {
+nlohmann::json loopsJson(const system::SlamSystem& slam) {
   nlohmann::json loops = nlohmann::json::array();
   for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
     if (!loop.applied) continue;
@@ -184,7 +185,7 @@ int run(const io::CommandLine& args) {
   const fs::path out = args.required("out");
   const long max_frames = args.integer("max-frames", -1);
   const bool quiet = args.has("quiet");
-  mapping::SlamParams params;
+  system::SlamParams params;
   if (args.has("config")) params = io::loadSlamParams(args.required("config"));
   if (args.has("se3")) params.mapper.loop_correction.graph.mode = loop::PoseGraphMode::kSE3;
   if (args.has("no-loop-closure")) params.loop.enabled = false;
@@ -202,7 +203,7 @@ int run(const io::CommandLine& args) {
   if (!quiet) std::cout << "# parameters\n" << io::formatSlamParams(params);
   std::cout << "dataset: " << dataset << " (" << sequence->describe() << ")\n"
             << "camera: " << calibration.describe() << "\n";
-  mapping::SlamSystem slam(geometry::makeCameraModel(calibration), params);
+  system::SlamSystem slam(geometry::makeCameraModel(calibration), params);
   const double startup_ms = timer.ms();
 
   std::vector<io::StampedPose> trajectory;

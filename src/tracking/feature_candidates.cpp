@@ -16,7 +16,7 @@ void FeatureCandidateParams::validate() const {
 }
 
 FeatureCandidates::FeatureCandidates(const FeatureCandidateParams& params,
-                                     const FeatureDetectionParams& detection,
+                                     const features::FeatureDetectionParams& detection,
                                      double focal_length_px)
     : params_(params), detection_(detection), focal_length_px_(focal_length_px) {
   params_.validate();
@@ -96,17 +96,19 @@ std::vector<PromotedFeature> FeatureCandidates::promote(map::KeyframeId keyframe
 }
 
 int FeatureCandidates::spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf_world,
-                             const ImagePyramid& image, std::vector<Eigen::Vector2d> occupied,
-                             double scene_depth, const geometry::CameraModel& camera) {
+                             const features::ImagePyramid& image,
+                             std::vector<Eigen::Vector2d> occupied, double scene_depth,
+                             const geometry::CameraModel& camera) {
   const int room = std::min(params_.new_per_keyframe,
                             params_.max_candidates - static_cast<int>(candidates_.size()));
   if (room <= 0 || !(scene_depth > 0.0)) return 0;
   for (const Candidate& c : candidates_)
     occupied.push_back(c.px);
   int added = 0;
-  for (const cv::KeyPoint& corner : detectSpreadCorners(image.base(), room, detection_, occupied)) {
+  for (const cv::KeyPoint& corner :
+       features::detectSpreadCorners(image.base(), room, detection_, occupied)) {
     const Eigen::Vector2d px(corner.pt.x, corner.pt.y);
-    PointAppearance appearance;
+    features::PointAppearance appearance;
     if (!appearance.cut(image, px)) continue;
     const Eigen::Vector2d xy = camera.undistortToNormalized(px);
     Candidate c{InverseDepthFilter(keyframe, T_kf_world, xy, 1.0 / scene_depth, focal_length_px_,

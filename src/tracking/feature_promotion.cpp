@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "../mapping/reprojection_cost.h"
+#include "scale_drift_slam/features/reprojection_cost.h"
 #include "scale_drift_slam/tracking/inverse_depth_filter.h"
 #include "small_levenberg_marquardt.h"
 
@@ -22,8 +22,8 @@ double pointCost(const std::vector<PromotionView>& views, const Eigen::Vector3d&
   for (const PromotionView& view : views) {
     Eigen::Vector2d r;
     Eigen::Matrix<double, 2, 3> J;
-    if (!mapping::internal::reprojectionResidual(view.T_kf_world, x, view.xy, focal, &r, nullptr,
-                                                 H != nullptr ? &J : nullptr)) {
+    if (!features::reprojectionResidual(view.T_kf_world, x, view.xy, focal, &r, nullptr,
+                                        H != nullptr ? &J : nullptr)) {
       return std::numeric_limits<double>::infinity();
     }
     cost += r.squaredNorm();

@@ -33,7 +33,7 @@ OpticalFlowParams initializerFlow(OpticalFlowParams params) {
 
 MapInitializer::MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
                                const InitializerParams& params,
-                               const FeatureDetectionParams& features,
+                               const features::FeatureDetectionParams& features,
                                const OpticalFlowParams& flow)
     : camera_(std::move(camera)),
       params_(params),
@@ -50,9 +50,9 @@ void MapInitializer::reset() {
   current_px_.clear();
 }
 
-void MapInitializer::startReference(double timestamp, const ImagePyramid& image) {
+void MapInitializer::startReference(double timestamp, const features::ImagePyramid& image) {
   const std::vector<cv::KeyPoint> corners =
-      detectSpreadCorners(image.base(), params_.num_features, features_);
+      features::detectSpreadCorners(image.base(), params_.num_features, features_);
   reference_px_.clear();
   for (const cv::KeyPoint& k : corners)
     reference_px_.push_back(k.pt);
@@ -68,7 +68,8 @@ void MapInitializer::startReference(double timestamp, const ImagePyramid& image)
           : "too few corners (" + std::to_string(reference_px_.size()) + ") for a reference frame";
 }
 
-std::optional<InitialMap> MapInitializer::addFrame(double timestamp, const ImagePyramid& image) {
+std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
+                                                   const features::ImagePyramid& image) {
   if (!has_reference_) {
     startReference(timestamp, image);
     return std::nullopt;

@@ -32,7 +32,7 @@ Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
 }  // namespace
 
 MotionPriorEstimator::MotionPriorEstimator(
-    const MotionPriorParams& params, const mapping::MotionOnlyBundleAdjustmentParams& motion_ba)
+    const MotionPriorParams& params, const features::MotionOnlyBundleAdjustmentParams& motion_ba)
     : params_(params), motion_ba_(motion_ba), flow_(params.flow) {
   params_.validate();
 }
@@ -46,10 +46,10 @@ MotionPrior MotionPriorEstimator::fallback(const geometry::SE3& T_guess, double 
 }
 
 MotionPrior MotionPriorEstimator::estimate(
-    const ImagePyramid& previous, const ImagePyramid& current, const std::vector<FlowSeed>& seeds,
-    const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess, double scene_depth,
-    const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
-    std::vector<unsigned char>* extra_ok) {
+    const features::ImagePyramid& previous, const features::ImagePyramid& current,
+    const std::vector<FlowSeed>& seeds, const std::vector<cv::Point2f>& extra_px,
+    const geometry::SE3& T_guess, double scene_depth, const geometry::CameraModel& camera,
+    std::vector<cv::Point2f>* extra_tracked, std::vector<unsigned char>* extra_ok) {
   // An even subset of the seeds is plenty for six pose parameters and bounds the flow's cost.
   std::vector<FlowSeed> picked;
   const std::size_t n = std::min<std::size_t>(seeds.size(), params_.max_tracks);
@@ -66,7 +66,7 @@ MotionPrior MotionPriorEstimator::estimate(
   extra_tracked->assign(to.begin() + picked.size(), to.end());
   extra_ok->assign(ok.begin() + picked.size(), ok.end());
 
-  mapping::MotionOnlyInput input;
+  features::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
   input.focal_length_px = camera.calibration().meanFocalLength();
   for (std::size_t i = 0; i < picked.size(); ++i) {
@@ -77,9 +77,9 @@ MotionPrior MotionPriorEstimator::estimate(
   if (static_cast<int>(input.observations.size()) < params_.min_tracks) {
     return fallback(T_guess, scene_depth);
   }
-  mapping::MotionOnlyResult result;
+  features::MotionOnlyResult result;
   try {
-    result = mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+    result = features::solveMotionOnlyBundleAdjustment(input, motion_ba_);
   } catch (const std::invalid_argument&) {
     return fallback(T_guess, scene_depth);
   }
@@ -105,7 +105,7 @@ MotionPrior MotionPriorEstimator::estimate(
 }
 
 std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
-    const std::vector<ImagePyramid>& frames, const std::vector<FlowSeed>& seeds,
+    const std::vector<features::ImagePyramid>& frames, const std::vector<FlowSeed>& seeds,
     const geometry::SE3& T_guess, const geometry::CameraModel& camera) {
   Carried carried;
   carried.T_cam_world = T_guess;
@@ -128,7 +128,7 @@ std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
   }
   if (static_cast<int>(carried.px.size()) < params_.min_tracks) return std::nullopt;
   if (frames.size() <= 1) return carried;
-  mapping::MotionOnlyInput input;
+  features::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
   input.focal_length_px = camera.calibration().meanFocalLength();
   for (std::size_t i = 0; i < carried.px.size(); ++i) {
@@ -136,9 +136,9 @@ std::optional<MotionPriorEstimator::Carried> MotionPriorEstimator::carry(
         {seeds[carried.seed[i]].p_world,
          camera.undistortToNormalized(Eigen::Vector2d(carried.px[i].x, carried.px[i].y))});
   }
-  mapping::MotionOnlyResult result;
+  features::MotionOnlyResult result;
   try {
-    result = mapping::solveMotionOnlyBundleAdjustment(input, motion_ba_);
+    result = features::solveMotionOnlyBundleAdjustment(input, motion_ba_);
   } catch (const std::invalid_argument&) {  // e.g. too few points in front of the camera
     return std::nullopt;
   }

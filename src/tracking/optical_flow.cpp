@@ -33,9 +33,9 @@ OpticalFlow::OpticalFlow(const OpticalFlowParams& params) : params_(params) {
   if (params_.method == FlowMethod::kDis) dis_ = cv::DISOpticalFlow::create(params_.dis_preset);
 }
 
-void OpticalFlow::track(const ImagePyramid& previous, const ImagePyramid& current,
-                        const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
-                        std::vector<unsigned char>* ok) {
+void OpticalFlow::track(const features::ImagePyramid& previous,
+                        const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
+                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) {
   to->assign(from.size(), cv::Point2f(0.f, 0.f));
   ok->assign(from.size(), 0);
   if (from.empty() || previous.levels.empty() || current.levels.empty()) return;
@@ -54,7 +54,8 @@ void OpticalFlow::track(const ImagePyramid& previous, const ImagePyramid& curren
   }
 }
 
-void OpticalFlow::trackLucasKanade(const ImagePyramid& previous, const ImagePyramid& current,
+void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
+                                   const features::ImagePyramid& current,
                                    const std::vector<cv::Point2f>& from,
                                    std::vector<cv::Point2f>* to,
                                    std::vector<unsigned char>* ok) const {
@@ -82,7 +83,8 @@ void OpticalFlow::trackLucasKanade(const ImagePyramid& previous, const ImagePyra
   }
 }
 
-void OpticalFlow::trackDis(const ImagePyramid& previous, const ImagePyramid& current,
+void OpticalFlow::trackDis(const features::ImagePyramid& previous,
+                           const features::ImagePyramid& current,
                            const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
                            std::vector<unsigned char>* ok) {
   // DIS wants continuous images: copy the ROIs out of their padded buffers.

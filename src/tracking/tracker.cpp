@@ -91,7 +91,8 @@ Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const Trac
   params_.validate();
 }
 
-FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding) {
+FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
+                                  features::PixelEncoding encoding) {
   Stopwatch total, stage;
   const double cpu_start = threadCpuMs();
   FrameResult result;
@@ -102,22 +103,22 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image, PixelE
   ++frame_index_;
   cv::Mat grey;
   try {
-    grey = toGrey(image, encoding);
+    grey = features::toGrey(image, encoding);
   } catch (const std::invalid_argument& e) {
     rejectFrame(e.what(), &result);
     restartYoungLostMap(&result);
     return result;
   }
   const std::string problem =
-      frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
+      features::frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {
     rejectFrame(problem, &result);
     restartYoungLostMap(&result);
     return result;
   }
   rejected_in_row_ = 0;
-  const ImagePyramid pyramid =
-      buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
+  const features::ImagePyramid pyramid =
+      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
   result.times.prepare = stage.lapMs();
   try {
     if (state_ == TrackingState::kInitializing) {
@@ -188,7 +189,7 @@ void Tracker::restartYoungLostMap(FrameResult* result) {
                      " keyframes (too young to relocalise in): discarded, initialising again";
 }
 
-void Tracker::requestRelocalisation(double timestamp, const ImagePyramid& image,
+void Tracker::requestRelocalisation(double timestamp, const features::ImagePyramid& image,
                                     FrameResult* result) {
   if (relocalisation_ && frame_index_ - relocalisation_->frame_index <
                              static_cast<std::uint64_t>(params_.relocalisation_retry_frames)) {
@@ -254,7 +255,8 @@ void Tracker::applyMapUpdate(const map::MapUpdate& update) {
 }
 
 map::PointId Tracker::addNewPoint(const Eigen::Vector3d& p_world,
-                                  map::KeyframeId reference_keyframe, PointAppearance appearance,
+                                  map::KeyframeId reference_keyframe,
+                                  features::PointAppearance appearance,
                                   map::KeyframeMessage* message) {
   TrackedPoint point;
   point.id = next_point_id_++;
@@ -267,7 +269,7 @@ map::PointId Tracker::addNewPoint(const Eigen::Vector3d& p_world,
 }
 
 map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
-                                           const ImagePyramid& image) {
+                                           const features::ImagePyramid& image) {
   map::KeyframeMessage message;
   message.keyframe.id = next_keyframe_id_++;
   message.keyframe.timestamp = timestamp;
@@ -277,7 +279,8 @@ map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3
   return message;
 }
 
-void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResult* result) {
+void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
+                         FrameResult* result) {
   std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
   result->message = initializer_.status();
   if (!initial) return;
@@ -291,7 +294,7 @@ void Tracker::initialise(double timestamp, const ImagePyramid& image, FrameResul
   std::vector<Eigen::Vector2d> occupied;
   for (std::size_t i = 0; i < initial->p_first.size(); ++i) {
     if (!initial->triangulated[i]) continue;
-    PointAppearance appearance;
+    features::PointAppearance appearance;
     if (!appearance.cut(initial->first_image, initial->px_first[i])) continue;
     const map::PointId id =
         addNewPoint(initial->p_first[i], first.keyframe.id, std::move(appearance), &first);

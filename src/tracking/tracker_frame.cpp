@@ -17,7 +17,7 @@ double elapsedMs(std::chrono::steady_clock::time_point* last) {
 
 }  // namespace
 
-void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* result) {
+void Tracker::track(double timestamp, const features::ImagePyramid& image, FrameResult* result) {
   auto clock = std::chrono::steady_clock::now();
   // 1. Motion prior: flow from the previous frame (its map points and the feature candidates).
   std::vector<cv::Point2f> candidate_px;
@@ -26,7 +26,7 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   result->times.flow = elapsedMs(&clock);
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
-  const std::vector<SearchMatch> matches = searchLocalMap(prior, image, &ids);
+  const std::vector<features::SearchMatch> matches = searchLocalMap(prior, image, &ids);
   result->times.search = elapsedMs(&clock);
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
   std::vector<Measurement> inliers;
@@ -75,7 +75,7 @@ void Tracker::track(double timestamp, const ImagePyramid& image, FrameResult* re
   result->times.keyframe = elapsedMs(&clock);
 }
 
-MotionPrior Tracker::estimatePrior(const ImagePyramid& image,
+MotionPrior Tracker::estimatePrior(const features::ImagePyramid& image,
                                    std::vector<cv::Point2f>* candidate_px,
                                    std::vector<unsigned char>* candidate_ok) {
   const geometry::SE3 velocity = T_previous_world_ * T_before_previous_world_.inverse();
@@ -92,9 +92,9 @@ MotionPrior Tracker::estimatePrior(const ImagePyramid& image,
                                 last_scene_depth_, *camera_, candidate_px, candidate_ok);
 }
 
-std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
-                                                 const ImagePyramid& image,
-                                                 std::vector<map::PointId>* ids) {
+std::vector<features::SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
+                                                           const features::ImagePyramid& image,
+                                                           std::vector<map::PointId>* ids) {
   std::vector<map::PointId> tracked;
   tracked.reserve(previous_measurements_.size());
   for (const Measurement& m : previous_measurements_)
@@ -102,7 +102,7 @@ std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
   *ids = map_.localPoints(prior.T_cur_world.inverseTranslation(), params_.local_recent_keyframes,
                           params_.local_nearest_keyframes, tracked,
                           params_.local_covisibility_min_shared, frame_index_);
-  std::vector<SearchPoint> search_points;
+  std::vector<features::SearchPoint> search_points;
   search_points.reserve(ids->size());
   for (const map::PointId id : *ids) {
     const TrackedPoint& point = map_.point(id);
@@ -117,15 +117,15 @@ std::vector<SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
                                           : geometry::SE3();
     search_points.push_back({point.p_world, T_ref_world, &point.appearance});
   }
-  const CornerGrid corners = detectSearchCorners(image.base(), params_.search);
-  return activeSearch(search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners,
-                      params_.search);
+  const features::CornerGrid corners = features::detectSearchCorners(image.base(), params_.search);
+  return features::activeSearch(search_points, prior.T_cur_world, prior.Sigma, *camera_, image,
+                                corners, params_.search);
 }
 
 geometry::SE3 Tracker::solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
-                                 const std::vector<SearchMatch>& matches,
+                                 const std::vector<features::SearchMatch>& matches,
                                  std::vector<Measurement>* inliers, FrameResult* result) {
-  mapping::MotionOnlyInput input;
+  features::MotionOnlyInput input;
   input.T_cam_world_guess = prior.T_cur_world;
   input.focal_length_px = focal_;
   std::vector<std::size_t> used;
@@ -140,17 +140,17 @@ geometry::SE3 Tracker::solvePose(const MotionPrior& prior, const std::vector<map
   }
   result->num_found = static_cast<int>(used.size());
   if (result->num_found < params_.min_inliers) return prior.T_cur_world;
-  const mapping::MotionOnlyResult solved =
-      mapping::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
+  const features::MotionOnlyResult solved =
+      features::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
   for (std::size_t k = 0; k < used.size(); ++k) {
-    const SearchMatch& match = matches[used[k]];
+    const features::SearchMatch& match = matches[used[k]];
     if (solved.inlier[k]) inliers->push_back({ids[used[k]], match.px, match.xy});
   }
   result->num_inliers = static_cast<int>(inliers->size());
   return solved.T_cam_world;
 }
 
-void Tracker::dropKeyframe(double timestamp, const ImagePyramid& image,
+void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image,
                            const std::vector<Measurement>& inliers, FrameResult* result) {
   const geometry::SE3& T_kf_world = T_previous_world_;
   map::KeyframeMessage message = makeKeyframe(timestamp, T_kf_world, image);

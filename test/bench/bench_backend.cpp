@@ -6,7 +6,7 @@
 #include <random>
 
 #include "bench_report.h"
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/mapping/window_bundle_adjustment.h"
 
 namespace sds = scale_drift_slam;
@@ -63,11 +63,11 @@ sds::mapping::WindowBundleInput makeWindow(std::mt19937& rng, bool settled) {
   return input;
 }
 
-sds::mapping::MotionOnlyInput makeMotionOnly(std::mt19937& rng, int num_points) {
+sds::features::MotionOnlyInput makeMotionOnly(std::mt19937& rng, int num_points) {
   constexpr double kFocal = 400.0;
   std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, 1.0 / kFocal);
-  sds::mapping::MotionOnlyInput input;
+  sds::features::MotionOnlyInput input;
   input.focal_length_px = kFocal;
   const SE3 T_true(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.1, 0.2, 0.3));
   for (int i = 0; i < num_points; ++i) {
@@ -103,15 +103,15 @@ int main(int argc, char** argv) {
   }
 
   for (auto solver :
-       {sds::mapping::MotionOnlySolver::kHandWritten, sds::mapping::MotionOnlySolver::kCeres}) {
-    const sds::mapping::MotionOnlyInput input = makeMotionOnly(rng, 300);
-    sds::mapping::MotionOnlyBundleAdjustmentParams params;
+       {sds::features::MotionOnlySolver::kHandWritten, sds::features::MotionOnlySolver::kCeres}) {
+    const sds::features::MotionOnlyInput input = makeMotionOnly(rng, 300);
+    sds::features::MotionOnlyBundleAdjustmentParams params;
     params.solver = solver;
     const std::string name =
-        solver == sds::mapping::MotionOnlySolver::kCeres ? "Ceres" : "hand-written LM";
-    sds::mapping::MotionOnlyResult result;
+        solver == sds::features::MotionOnlySolver::kCeres ? "Ceres" : "hand-written LM";
+    sds::features::MotionOnlyResult result;
     report.timeMs("motion-only BA, 300 points, " + name, 200,
-                  [&] { result = sds::mapping::solveMotionOnlyBundleAdjustment(input, params); });
+                  [&] { result = sds::features::solveMotionOnlyBundleAdjustment(input, params); });
     report.add("motion-only BA, " + name + ": iterations", result.statistics.iterations, "");
   }
   return 0;

@@ -103,7 +103,7 @@ void benchVerification(Report& report) {
   c.width = 640;
   c.height = 480;
   const auto camera = sds::geometry::makeCameraModel(c);
-  const auto room = sds::tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = sds::test::boxRoom(4.0, 2.0, 4.0, 40);
   const sds::geometry::SE3 T_loop;
   const sds::geometry::SE3 T_current(sds::geometry::expSO3(Eigen::Vector3d(0.02, 0.14, -0.03)),
                                      Eigen::Vector3d(-0.35, 0.1, -0.3));
@@ -115,10 +115,10 @@ void benchVerification(Report& report) {
   } sides[2];
   const sds::geometry::SE3 poses[2] = {T_current, T_loop};
   for (int s = 0; s < 2; ++s) {
-    sides[s].image = sds::tracking::test::renderPlanes(room, camera->K(), poses[s], 640, 480);
+    sides[s].image = sds::test::renderPlanes(room, camera->K(), poses[s], 640, 480);
     sides[s].features = extractor.extract(sides[s].image, camera.get());
     sides[s].view.features = &sides[s].features;
-    sides[s].view.image = sds::tracking::buildPyramid(sides[s].image, 2);
+    sides[s].view.image = sds::features::buildPyramid(sides[s].image, 2);
     for (int k = 0; k < 250; ++k) {  // a grid of wall points, as a keyframe's map points
       const Eigen::Vector3d p_cam =
           poses[s] * Eigen::Vector3d(-3.5 + 0.28 * (k % 25), -1.6 + 0.32 * (k / 25), 4.0);

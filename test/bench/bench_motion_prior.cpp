@@ -10,8 +10,8 @@
 
 #include "../tracking/synthetic_images.h"
 #include "bench_report.h"
+#include "scale_drift_slam/features/feature_detection.h"
 #include "scale_drift_slam/geometry/so3.h"
-#include "scale_drift_slam/tracking/feature_detection.h"
 #include "scale_drift_slam/tracking/optical_flow.h"
 
 using namespace scale_drift_slam;
@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);
   bench::Report report("motion_prior", argc, argv);
   const Eigen::Matrix3d K = (Eigen::Matrix3d() << 500, 0, 319.5, 0, 500, 239.5, 0, 0, 1).finished();
-  tracking::test::TexturedPlane wall;
-  wall.texture = tracking::test::texturedImage(2000, 1400, 21);
+  test::TexturedPlane wall;
+  wall.texture = test::texturedImage(2000, 1400, 21);
   wall.origin = Eigen::Vector3d(0, 0, 3.0);
   wall.axis_u = Eigen::Vector3d(std::cos(0.3), 0, std::sin(0.3));
   wall.axis_v = Eigen::Vector3d(0, 1, 0);
@@ -44,7 +44,8 @@ int main(int argc, char** argv) {
     tracking::OpticalFlowParams params;
   };
   std::vector<Variant> variants;
-  for (const auto& [window, levels] : {std::pair{21, 4}, std::pair{15, 4}, std::pair{15, 3}, std::pair{11, 3}}) {
+  for (const auto& [window, levels] :
+       {std::pair{21, 4}, std::pair{15, 4}, std::pair{15, 3}, std::pair{11, 3}}) {
     tracking::OpticalFlowParams p;
     p.window = window;
     p.pyramid_levels = levels;
@@ -60,16 +61,17 @@ int main(int argc, char** argv) {
 
   for (const double speed : {1.0, 3.0}) {  // inter-frame motion: ~5 px and ~15 px of flow
     const geometry::SE3 T_a_world;
-    const geometry::SE3 T_world_b(geometry::expSO3(Eigen::Vector3d(Eigen::Vector3d(0.002, 0.004, 0.001) * speed)),
-                                  Eigen::Vector3d(0.03, -0.01, 0.02) * speed);
+    const geometry::SE3 T_world_b(
+        geometry::expSO3(Eigen::Vector3d(Eigen::Vector3d(0.002, 0.004, 0.001) * speed)),
+        Eigen::Vector3d(0.03, -0.01, 0.02) * speed);
     const geometry::SE3 T_b_world = T_world_b.inverse();
-    const cv::Mat image_a = tracking::test::renderPlanes({wall}, K, T_a_world, 640, 480);
-    const cv::Mat image_b = tracking::test::renderPlanes({wall}, K, T_b_world, 640, 480);
-    const tracking::ImagePyramid pyr_a = tracking::buildPyramid(image_a, 4);
-    const tracking::ImagePyramid pyr_b = tracking::buildPyramid(image_b, 4);
+    const cv::Mat image_a = test::renderPlanes({wall}, K, T_a_world, 640, 480);
+    const cv::Mat image_b = test::renderPlanes({wall}, K, T_b_world, 640, 480);
+    const features::ImagePyramid pyr_a = features::buildPyramid(image_a, 4);
+    const features::ImagePyramid pyr_b = features::buildPyramid(image_b, 4);
     const Eigen::Matrix3d H = planeHomography(K, T_b_world * T_a_world.inverse(), n_world, d_world);
     std::vector<cv::Point2f> corners;
-    for (const auto& k : tracking::detectSpreadCorners(image_a, 200, {}))
+    for (const auto& k : features::detectSpreadCorners(image_a, 200, {}))
       corners.push_back(k.pt);
     for (Variant& variant : variants) {
       tracking::OpticalFlow flow(variant.params);

@@ -21,9 +21,9 @@ void expectFailure(const std::string& text, const std::string& reason) {
 }
 
 TEST(SlamParamsIo, DefaultFileEqualsTheStructDefaults) {
-  const mapping::SlamParams from_file =
+  const system::SlamParams from_file =
       loadSlamParams(std::string(SDS_TEST_DATA_DIR) + "/../../config/default.yaml");
-  const mapping::SlamParams defaults;
+  const system::SlamParams defaults;
   EXPECT_EQ(formatSlamParams(from_file), formatSlamParams(defaults));
 }
 
@@ -34,9 +34,9 @@ TEST(SlamParamsIo, KeysOverrideDefaults) {
   EXPECT_EQ(p.tracker.good_inliers, 70);
   EXPECT_EQ(p.tracker.motion_prior.flow.method, tracking::FlowMethod::kDis);
   EXPECT_EQ(p.mapper.window.window_size, 7);
-  EXPECT_EQ(p.tracker.motion_ba.solver, mapping::MotionOnlySolver::kCeres);
+  EXPECT_EQ(p.tracker.motion_ba.solver, features::MotionOnlySolver::kCeres);
   EXPECT_FALSE(p.mapping_thread);
-  const mapping::SlamParams defaults;
+  const system::SlamParams defaults;
   EXPECT_EQ(p.tracker.min_inliers, defaults.tracker.min_inliers);
   // The printed form reads back to the same values.
   EXPECT_EQ(formatSlamParams(parseSlamParams(formatSlamParams(p))), formatSlamParams(p));

@@ -21,7 +21,7 @@ constexpr int kWidth = 640, kHeight = 480;
 constexpr double kWall = 4.0;  // the far wall is the plane z = 4 m
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(450.0);
+  return test::pinholeCamera(450.0);
 }
 
 struct View {
@@ -32,14 +32,13 @@ struct View {
 
 /// The view from T_cam_world; its map points are wall points it sees, in its camera frame,
 /// multiplied by `map_scale` (the units of its part of a drifting map).
-View makeView(const std::vector<tracking::test::TexturedPlane>& room,
-              const geometry::CameraModel& cam, const geometry::SE3& T_cam_world, double map_scale,
-              bool with_points, unsigned seed) {
+View makeView(const std::vector<test::TexturedPlane>& room, const geometry::CameraModel& cam,
+              const geometry::SE3& T_cam_world, double map_scale, bool with_points, unsigned seed) {
   View view;
-  view.image = tracking::test::renderPlanes(room, cam.K(), T_cam_world, kWidth, kHeight);
+  view.image = test::renderPlanes(room, cam.K(), T_cam_world, kWidth, kHeight);
   AppearanceExtractor extractor{AppearanceParams{}};
   view.features = extractor.extract(view.image, &cam);
-  view.verification.image = tracking::buildPyramid(view.image, 2);
+  view.verification.image = features::buildPyramid(view.image, 2);
   if (!with_points) return view;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> x(-3.8, 3.8), y(-1.8, 1.8);
@@ -63,7 +62,7 @@ std::vector<DescriptorMatch> inlierMatches(const View& current, const View& cand
 }
 
 struct Scene {
-  std::vector<tracking::test::TexturedPlane> room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  std::vector<test::TexturedPlane> room = test::boxRoom(4.0, 2.0, 4.0, 40);
   std::shared_ptr<const geometry::CameraModel> cam = camera();
   geometry::SE3 T_loop_world;
   geometry::SE3 T_current_world{geometry::expSO3(Eigen::Vector3d(0.02, 0.14, -0.03)),

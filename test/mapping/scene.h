@@ -9,7 +9,7 @@
 
 #include "scale_drift_slam/geometry/se3.h"
 
-namespace scale_drift_slam::mapping::testing {
+namespace scale_drift_slam::testing {
 
 struct Scene {
   std::vector<geometry::SE3> T_cam_world;  ///< Cameras along x, looking along +z.
@@ -58,4 +58,4 @@ inline double positionError(const geometry::SE3& a, const geometry::SE3& b) {
   return (a.inverseTranslation() - b.inverseTranslation()).norm();
 }
 
-}  // namespace scale_drift_slam::mapping::testing
+}  // namespace scale_drift_slam::testing

@@ -56,7 +56,7 @@ TEST(WindowBundleAdjustment, ReducesErrorAndKeepsTheFixedKeyframesFixed) {
   EXPECT_TRUE(input.keyframes[0].fixed && input.keyframes[1].fixed && !input.keyframes[2].fixed);
 
   const WindowBundleResult result = solveWindowBundleAdjustment(input, params);
-  const BundleStatistics& stats = result.statistics;
+  const features::BundleStatistics& stats = result.statistics;
   EXPECT_LT(stats.final_cost, 0.2 * stats.initial_cost);
   EXPECT_GT(stats.iterations, 0);
   // The residual of the inliers falls to the noise level (1 px, 2 coordinates: ~1.41 RMS).

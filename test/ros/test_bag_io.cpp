@@ -15,7 +15,7 @@
 #include "scale_drift_slam/sim/sequence.h"
 #include "scale_drift_slam/sim/sequence_writer.h"
 
-namespace scale_drift_slam::ros_bag {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 void renderBoth(const std::string& directory, const std::string& bag_path, bool color) {
@@ -128,4 +128,4 @@ TEST(BagIo, MissingBagsAndTopicsAreReportedWithTheReason) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::ros_bag
+}  // namespace scale_drift_slam::ros_conversions

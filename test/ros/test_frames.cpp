@@ -6,7 +6,7 @@
 
 #include "scale_drift_slam/ros/frames.h"
 
-namespace scale_drift_slam::ros_frames {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 geometry::SE3 somePose() {
@@ -79,4 +79,4 @@ TEST(Frames, LoopCorrectionsKeepOdomContinuousAndMapExact) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::ros_frames
+}  // namespace scale_drift_slam::ros_conversions

@@ -37,17 +37,17 @@ TEST(ImageConversions, CommonEncodingsGiveTheSameGreyImage) {
   cv::cvtColor(grey, rgb, cv::COLOR_GRAY2RGB);
   cv::cvtColor(grey, bgra, cv::COLOR_GRAY2BGRA);
   grey.convertTo(mono16, CV_16UC1, 256.0);
-  const std::vector<std::pair<sensor_msgs::Image, tracking::PixelEncoding>> cases = {
-      {messageOf(grey, "mono8", 3), tracking::PixelEncoding::kMono8},
-      {messageOf(grey, "8UC1"), tracking::PixelEncoding::kMono8},
-      {messageOf(bgr, "bgr8"), tracking::PixelEncoding::kBgr8},
-      {messageOf(rgb, "rgb8", 1), tracking::PixelEncoding::kRgb8},
-      {messageOf(bgra, "bgra8"), tracking::PixelEncoding::kBgra8},
-      {messageOf(mono16, "mono16"), tracking::PixelEncoding::kMono16}};
+  const std::vector<std::pair<sensor_msgs::Image, features::PixelEncoding>> cases = {
+      {messageOf(grey, "mono8", 3), features::PixelEncoding::kMono8},
+      {messageOf(grey, "8UC1"), features::PixelEncoding::kMono8},
+      {messageOf(bgr, "bgr8"), features::PixelEncoding::kBgr8},
+      {messageOf(rgb, "rgb8", 1), features::PixelEncoding::kRgb8},
+      {messageOf(bgra, "bgra8"), features::PixelEncoding::kBgra8},
+      {messageOf(mono16, "mono16"), features::PixelEncoding::kMono16}};
   for (const auto& [msg, encoding] : cases) {
     const CameraImage image = cameraImageFromMsg(msg);
     EXPECT_EQ(image.encoding, encoding) << msg.encoding;
-    EXPECT_EQ(cv::norm(tracking::toGrey(image.image, image.encoding), grey, cv::NORM_INF), 0.0)
+    EXPECT_EQ(cv::norm(features::toGrey(image.image, image.encoding), grey, cv::NORM_INF), 0.0)
         << msg.encoding;
   }
   // mono16 in big-endian byte order.
@@ -84,14 +84,14 @@ TEST(ImageConversions, CompressedImagesAreDecoded) {
   png.format = "mono8; png compressed";
   cv::imencode(".png", grey, png.data);
   const CameraImage decoded = cameraImageFromMsg(png);
-  EXPECT_EQ(decoded.encoding, tracking::PixelEncoding::kMono8);
+  EXPECT_EQ(decoded.encoding, features::PixelEncoding::kMono8);
   EXPECT_EQ(cv::norm(decoded.image, grey, cv::NORM_INF), 0.0);
   cv::Mat bgr;
   cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
   sensor_msgs::CompressedImage jpeg;
   jpeg.format = "bgr8; jpeg compressed bgr8";
   cv::imencode(".jpg", bgr, jpeg.data);
-  EXPECT_EQ(cameraImageFromMsg(jpeg).encoding, tracking::PixelEncoding::kBgr8);
+  EXPECT_EQ(cameraImageFromMsg(jpeg).encoding, features::PixelEncoding::kBgr8);
   sensor_msgs::CompressedImage garbage;
   garbage.format = "jpeg";
   garbage.data = {1, 2, 3, 4};

@@ -9,7 +9,7 @@
 #include "scale_drift_slam/io/slam_params_io.h"
 #include "scale_drift_slam/ros/node_params.h"
 
-namespace scale_drift_slam::ros_params {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 using XmlRpc::XmlRpcValue;
@@ -44,7 +44,7 @@ TEST(NodeParams, DefaultsWithoutParameters) {
   EXPECT_TRUE(tracking.node.map_z_up);
   EXPECT_FALSE(tracking.calibration.has_value());
   EXPECT_TRUE(tracking.unknown.empty());
-  const mapping::SlamParams defaults;
+  const system::SlamParams defaults;
   EXPECT_EQ(io::formatSlamParams(tracking.slam), io::formatSlamParams(defaults));
   const MappingNodeConfig mapping = mappingNodeConfig(emptyStruct());
   EXPECT_EQ(mapping.node.map_frame, "map");
@@ -175,4 +175,4 @@ TEST(NodeParams, BadValuesNameTheParameter) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::ros_params
+}  // namespace scale_drift_slam::ros_conversions

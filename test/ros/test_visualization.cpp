@@ -8,7 +8,7 @@
 #include "scale_drift_slam/ros/frames.h"
 #include "scale_drift_slam/ros/visualization.h"
 
-namespace scale_drift_slam::ros_visualization {
+namespace scale_drift_slam::ros_conversions {
 namespace {
 
 map::Map smallMap() {
@@ -28,7 +28,7 @@ TEST(Visualization, CloudHoldsEveryPointInMapCoordinates) {
   const map::Map m = smallMap();
   std_msgs::Header header;
   header.frame_id = "map";
-  const geometry::SE3 T_map_world = ros_frames::mapFromWorld(true);
+  const geometry::SE3 T_map_world = ros_conversions::mapFromWorld(true);
   sensor_msgs::PointCloud2 cloud = mapCloud(m, T_map_world, header);
   EXPECT_EQ(cloud.header.frame_id, "map");
   ASSERT_EQ(cloud.width * cloud.height, 2u);
@@ -77,7 +77,7 @@ TEST(Visualization, KeyframeMarkersAndLoopEdges) {
 }
 
 TEST(Visualization, PathFollowsTheCorrectedTrajectory) {
-  const geometry::SE3 T_map_world = ros_frames::mapFromWorld(true);
+  const geometry::SE3 T_map_world = ros_conversions::mapFromWorld(true);
   CameraPath path(T_map_world, "map", 3);
   for (int i = 0; i < 5; ++i) {
     // Cameras looking along the world z axis (optical), moving along x.
@@ -134,4 +134,4 @@ TEST(Visualization, DebugImageShowsTrackedPoints) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::ros_visualization
+}  // namespace scale_drift_slam::ros_conversions

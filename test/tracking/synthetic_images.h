@@ -13,7 +13,7 @@
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/geometry/so3.h"
 
-namespace scale_drift_slam::tracking::test {
+namespace scale_drift_slam::test {
 
 /// An undistorted 640x480 pinhole camera with the principal point at the image centre.
 inline std::shared_ptr<const geometry::CameraModel> pinholeCamera(double focal_length_px) {
@@ -59,7 +59,7 @@ inline cv::Mat texturedImage(int width, int height, unsigned seed) {
   return image;
 }
 
-}  // namespace scale_drift_slam::tracking::test
+}  // namespace scale_drift_slam::test
 
 #include <vector>
 
@@ -68,7 +68,7 @@ inline cv::Mat texturedImage(int width, int height, unsigned seed) {
 
 #include "scale_drift_slam/geometry/se3.h"
 
-namespace scale_drift_slam::tracking::test {
+namespace scale_drift_slam::test {
 
 /// A textured rectangle in the world: texture pixel (u, v) sits at
 /// origin + (u - w/2) * metres_per_pixel * axis_u + (v - h/2) * metres_per_pixel * axis_v.
@@ -118,9 +118,9 @@ inline cv::Mat renderPlanes(const std::vector<TexturedPlane>& planes, const Eige
   return image;
 }
 
-}  // namespace scale_drift_slam::tracking::test
+}  // namespace scale_drift_slam::test
 
-namespace scale_drift_slam::tracking::test {
+namespace scale_drift_slam::test {
 
 /// The inside of a textured box (a room): x in [-hx, hx], y in [-hy, hy] (y down), z in [-hz, hz].
 inline std::vector<TexturedPlane> boxRoom(double hx, double hy, double hz, unsigned seed) {
@@ -145,4 +145,4 @@ inline std::vector<TexturedPlane> boxRoom(double hx, double hy, double hz, unsig
           face(Eigen::Vector3d(0, -hy, 0), X, Z, 2 * hx, 2 * hz, 5)};
 }
 
-}  // namespace scale_drift_slam::tracking::test
+}  // namespace scale_drift_slam::test

@@ -18,7 +18,7 @@ namespace {
 constexpr double kWallDepth = 3.0;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(500.0);
+  return test::pinholeCamera(500.0);
 }
 
 test::TexturedPlane wall() {
@@ -38,8 +38,9 @@ geometry::SE3 pose(int k) {
       .inverse();
 }
 
-ImagePyramid render(int k) {
-  return buildPyramid(test::renderPlanes({wall()}, camera()->K(), pose(k), 640, 480), 4, 15);
+features::ImagePyramid render(int k) {
+  return features::buildPyramid(test::renderPlanes({wall()}, camera()->K(), pose(k), 640, 480), 4,
+                                15);
 }
 
 /// Candidates spawned at keyframe 0 (frame 0), carried by the flow through frames 1-12 and
@@ -48,12 +49,12 @@ ImagePyramid render(int k) {
 std::vector<PromotedFeature> promoteAfterTwelveFrames(int first_without_pose = 0,
                                                       int last_without_pose = -1) {
   const auto cam = camera();
-  FeatureCandidates candidates(FeatureCandidateParams{}, FeatureDetectionParams{}, 500.0);
-  ImagePyramid previous = render(0);
+  FeatureCandidates candidates(FeatureCandidateParams{}, features::FeatureDetectionParams{}, 500.0);
+  features::ImagePyramid previous = render(0);
   EXPECT_GT(candidates.spawn(0, pose(0), previous, {}, kWallDepth, *cam), 100);
   OpticalFlow flow(OpticalFlowParams{});
   for (int k = 1; k <= 12; ++k) {
-    const ImagePyramid current = render(k);
+    const features::ImagePyramid current = render(k);
     std::vector<cv::Point2f> tracked;
     std::vector<unsigned char> ok;
     flow.track(previous, current, candidates.pixels(), &tracked, &ok);
@@ -100,10 +101,10 @@ TEST(FeatureCandidates, FollowTheFlowThroughFramesWithoutAPose) {
 
 TEST(MotionPrior, FlowRecoversTheMotion) {
   const auto cam = camera();
-  MotionPriorEstimator estimator(MotionPriorParams{}, mapping::MotionOnlyBundleAdjustmentParams{});
-  const ImagePyramid previous = render(0), current = render(3);
+  MotionPriorEstimator estimator(MotionPriorParams{}, features::MotionOnlyBundleAdjustmentParams{});
+  const features::ImagePyramid previous = render(0), current = render(3);
   std::vector<FlowSeed> seeds;
-  for (const cv::KeyPoint& k : detectSpreadCorners(previous.base(), 200, {})) {
+  for (const cv::KeyPoint& k : features::detectSpreadCorners(previous.base(), 200, {})) {
     const Eigen::Vector3d ray = cam->unproject(Eigen::Vector2d(k.pt.x, k.pt.y));
     seeds.push_back({k.pt, pose(0).inverse() * (ray * (kWallDepth / ray.z()))});
   }

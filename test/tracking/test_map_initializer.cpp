@@ -16,7 +16,7 @@ namespace {
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(500.0);
+  return test::pinholeCamera(500.0);
 }
 
 test::TexturedPlane wall(double depth, double tilt, unsigned seed, int w, int h) {
@@ -43,12 +43,12 @@ struct InitRun {
 
 InitRun runSequence(const std::vector<test::TexturedPlane>& planes,
                     const std::function<geometry::SE3(int)>& pose, int frames) {
-  MapInitializer initializer(camera(), InitializerParams{}, FeatureDetectionParams{});
+  MapInitializer initializer(camera(), InitializerParams{}, features::FeatureDetectionParams{});
   const Eigen::Matrix3d K = camera()->K();
   InitRun run;
   for (int k = 0; k < frames && !run.map; ++k) {
     const cv::Mat image = test::renderPlanes(planes, K, pose(k), kWidth, kHeight);
-    run.map = initializer.addFrame(0.1 * k, buildPyramid(image, 4));
+    run.map = initializer.addFrame(0.1 * k, features::buildPyramid(image, 4));
     run.frame = k;
   }
   return run;
@@ -105,14 +105,14 @@ TEST(MapInitializer, RefusesPureRotation) {
 }
 
 TEST(MapInitializer, SurvivesBlackAndBlankFrames) {
-  MapInitializer initializer(camera(), InitializerParams{}, FeatureDetectionParams{});
+  MapInitializer initializer(camera(), InitializerParams{}, features::FeatureDetectionParams{});
   for (int k = 0; k < 5; ++k) {
-    EXPECT_FALSE(
-        initializer.addFrame(k, buildPyramid(cv::Mat::zeros(kHeight, kWidth, CV_8UC1), 4)));
+    EXPECT_FALSE(initializer.addFrame(
+        k, features::buildPyramid(cv::Mat::zeros(kHeight, kWidth, CV_8UC1), 4)));
     EXPECT_FALSE(initializer.status().empty());
   }
-  EXPECT_FALSE(
-      initializer.addFrame(9, buildPyramid(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(200)), 4)));
+  EXPECT_FALSE(initializer.addFrame(
+      9, features::buildPyramid(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(200)), 4)));
 }
 
 }  // namespace

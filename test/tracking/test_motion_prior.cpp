@@ -24,9 +24,9 @@ geometry::SE3 fastPose(int k) {
 TEST(MotionPrior, CarriesPointsThroughFramesToTheTruePose) {
   const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto camera = test::pinholeCamera(450.0);
-  std::vector<ImagePyramid> frames;
+  std::vector<features::ImagePyramid> frames;
   for (int k = 0; k <= 6; ++k) {
-    frames.push_back(buildPyramid(
+    frames.push_back(features::buildPyramid(
         test::renderPlanes(room, camera->K(), fastPose(k).inverse(), 640, 480), 4, 15));
   }
   std::mt19937 rng(5);
@@ -40,7 +40,7 @@ TEST(MotionPrior, CarriesPointsThroughFramesToTheTruePose) {
           {cv::Point2f(static_cast<float>(px->x()), static_cast<float>(px->y())), p_world});
     }
   }
-  MotionPriorEstimator estimator{MotionPriorParams{}, mapping::MotionOnlyBundleAdjustmentParams{}};
+  MotionPriorEstimator estimator{MotionPriorParams{}, features::MotionOnlyBundleAdjustmentParams{}};
   const auto carried = estimator.carry(frames, seeds, fastPose(0).inverse(), *camera);
   ASSERT_TRUE(carried.has_value());
   EXPECT_GT(carried->px.size(), 120u);  // most survive six frames of 9-10 px motion each

@@ -7,17 +7,16 @@
 
 #include <string>
 
-#include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/system/slam_params.h"
 
 namespace scale_drift_slam::io {
 
 /// Reads and validates a parameter file. Throws std::runtime_error naming the file and the
 /// problem (unreadable, not YAML, unknown key, wrong kind of value, invalid value).
-mapping::SlamParams loadSlamParams(const std::string& path);
+system::SlamParams loadSlamParams(const std::string& path);
 /// The same from YAML text; `origin` names the source in error messages. Empty text = defaults.
-mapping::SlamParams parseSlamParams(const std::string& text,
-                                    const std::string& origin = "<string>");
+system::SlamParams parseSlamParams(const std::string& text, const std::string& origin = "<string>");
 /// Every parameter as YAML in the file's layout (printed once at start-up; loadable again).
-std::string formatSlamParams(const mapping::SlamParams& params);
+std::string formatSlamParams(const system::SlamParams& params);
 
 }  // namespace scale_drift_slam::io

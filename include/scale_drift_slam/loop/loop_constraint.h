@@ -17,10 +17,10 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/geometry/sim3.h"
 #include "scale_drift_slam/map/map.h"
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
 
 namespace scale_drift_slam::loop {
 
@@ -31,7 +31,7 @@ struct LoopConstraintParams {
   int min_inliers = 12;           ///< Fewer 2D-3D inliers: no constraint.
   double min_inlier_ratio = 0.3;  ///< Of the 2D-3D matches.
   int min_scale_pairs = 5;        ///< Fewer usable 3D-3D pairs: no constraint.
-  mapping::MotionOnlyBundleAdjustmentParams refinement;  ///< Its thresholds in pixels too.
+  features::MotionOnlyBundleAdjustmentParams refinement;  ///< Its thresholds in pixels too.
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };

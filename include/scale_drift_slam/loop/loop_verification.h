@@ -6,7 +6,7 @@
 //      candidate keyframe's projected map points (DepthRegressor): 2D-3D correspondences;
 //   3. P3P RANSAC and a robust refinement give T_current_candidate; then every map point of the
 //      candidate is searched in the current image with a perspectively warped patch cut from the
-//      candidate's image (tracking::activeSearch) around its predicted pixel, and the pose is
+//      candidate's image (features::activeSearch) around its predicted pixel, and the pose is
 //      refined again on all matches;
 //   4. (loops only) the current keyframe's own map gives depths for its side of the matches:
 //      3D-3D pairs, and the relative scale is their median distance ratio.
@@ -17,21 +17,21 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/active_search.h"
+#include "scale_drift_slam/features/image_preparation.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/loop/appearance.h"
 #include "scale_drift_slam/loop/depth_regression.h"
 #include "scale_drift_slam/loop/geometric_check.h"
 #include "scale_drift_slam/loop/loop_constraint.h"
 #include "scale_drift_slam/map/map.h"
-#include "scale_drift_slam/tracking/active_search.h"
-#include "scale_drift_slam/tracking/image_preparation.h"
 
 namespace scale_drift_slam::loop {
 
 struct LoopVerificationParams {
   DepthRegressionParams depth;
   LoopConstraintParams constraint;      ///< RANSAC, refinement and the minimum support.
-  tracking::ActiveSearchParams search;  ///< The warped-patch search of the candidate's points.
+  features::ActiveSearchParams search;  ///< The warped-patch search of the candidate's points.
   /// Prior uncertainty of T_current_candidate for the search regions: rotation (rad) and
   /// translation (fraction of the candidate's median scene depth).
   double search_rotation_sigma = 0.01;
@@ -54,7 +54,7 @@ struct VerificationView {
   std::vector<Eigen::Vector3d> point_camera;  ///< The point in this view's camera frame.
   /// The image the view was taken from (distorted, as captured): the candidate's patches are cut
   /// from it, the current view's image is searched. May be empty (no search then).
-  tracking::ImagePyramid image;
+  features::ImagePyramid image;
 };
 
 /// A map point of the candidate found in the current image.

@@ -2,7 +2,7 @@
 // The typed messages between the SLAM's threads (offline) or nodes (ROS): the tracker emits a
 // KeyframeMessage for every keyframe it drops; the mapper answers with MapUpdates (window BA
 // results, later loop corrections). Plain values: they are copied or moved across a queue
-// (map/message_queue.h) or converted to ROS messages (src/ros/), never shared by pointer.
+// (common/message_queue.h) or converted to ROS messages (src/ros/), never shared by pointer.
 
 #include <cstdint>
 #include <optional>

@@ -83,7 +83,8 @@ class Mapper {
   /// correction; observations of points the map does not know are skipped), runs the window BA
   /// and returns the correction of the window's poses and points. `statistics`, when given,
   /// receives the BA's figures (time_ms = 0 when it did not run).
-  map::MapUpdate addKeyframe(map::KeyframeMessage message, BundleStatistics* statistics = nullptr);
+  map::MapUpdate addKeyframe(map::KeyframeMessage message,
+                             features::BundleStatistics* statistics = nullptr);
 
   /// Applies a verified loop constraint: the pose graph over all keyframes (consecutive and
   /// co-visibility edges from the current estimates, every loop edge so far), the point and

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/bundle_statistics.h"
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/map/map.h"
 
@@ -65,24 +66,11 @@ struct WindowBundleInput {
   void validate() const;
 };
 
-struct BundleStatistics {
-  int iterations = 0;
-  double initial_cost = 0.0;  ///< sum rho (pixels^2), at the start.
-  double final_cost = 0.0;
-  double initial_rmse_px = 0.0;  ///< RMS of the pixel errors of the inliers, before and after.
-  double final_rmse_px = 0.0;
-  std::size_t num_observations = 0;
-  std::size_t num_inliers = 0;  ///< Final pixel error below the inlier threshold.
-  double time_ms = 0.0;
-  bool converged = false;
-  std::string message;
-};
-
 struct WindowBundleResult {
   std::vector<BundleKeyframe> keyframes;  ///< Same order as the input; fixed ones unchanged.
   std::vector<BundlePoint> points;        ///< Same order as the input.
   std::vector<bool> inlier;               ///< Per input observation.
-  BundleStatistics statistics;
+  features::BundleStatistics statistics;
 };
 
 /// Builds the window from the map: the newest `window_size` keyframes (by id), the two

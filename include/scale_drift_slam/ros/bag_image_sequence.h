@@ -9,7 +9,7 @@
 
 #include "scale_drift_slam/io/image_sequence.h"
 
-namespace scale_drift_slam::ros_bag {
+namespace scale_drift_slam::ros_conversions {
 
 /// Opens the bag. Throws std::runtime_error naming the bag and the reason when it cannot be
 /// opened or holds no message on `image_topic` (the message lists the image topics it has).
@@ -17,4 +17,4 @@ std::unique_ptr<io::ImageSequence> openBagImageSequence(const std::string& path,
                                                         const std::string& image_topic,
                                                         const std::string& camera_info_topic);
 
-}  // namespace scale_drift_slam::ros_bag
+}  // namespace scale_drift_slam::ros_conversions

@@ -24,7 +24,7 @@ namespace rosbag {
 class Bag;
 }
 
-namespace scale_drift_slam::ros_bag {
+namespace scale_drift_slam::ros_conversions {
 
 struct SequenceTopics {
   std::string image = "/camera/image_raw";
@@ -89,4 +89,4 @@ std::vector<BagImage> readBagImages(const std::string& path,
 std::vector<io::StampedPose> readBagPoses(const std::string& path,
                                           const std::string& topic = "/ground_truth/pose");
 
-}  // namespace scale_drift_slam::ros_bag
+}  // namespace scale_drift_slam::ros_conversions

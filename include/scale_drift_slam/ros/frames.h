@@ -13,7 +13,7 @@
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/geometry/sim3.h"
 
-namespace scale_drift_slam::ros_frames {
+namespace scale_drift_slam::ros_conversions {
 
 /// T_body_optical: maps optical-frame points into the camera body frame (REP 103:
 /// optical z -> body x, optical x -> body -y, optical y -> body -z).
@@ -33,7 +33,7 @@ struct CameraTransforms {
 /// the tracking node, used on its camera thread.
 class OdomFrame {
  public:
-  explicit OdomFrame(bool map_z_up) : T_map_world_(ros_frames::mapFromWorld(map_z_up)) {}
+  explicit OdomFrame(bool map_z_up) : T_map_world_(ros_conversions::mapFromWorld(map_z_up)) {}
 
   /// A loop correction of the tracker's map (MapUpdate::S_new_old): C <- S_new_old * C.
   void applyCorrection(const geometry::Sim3& S_new_old) { C_ = S_new_old * C_; }
@@ -50,4 +50,4 @@ class OdomFrame {
   geometry::Sim3 C_;  ///< Maps uncorrected (odom) SLAM-world coordinates into corrected ones.
 };
 
-}  // namespace scale_drift_slam::ros_frames
+}  // namespace scale_drift_slam::ros_conversions

@@ -1,21 +1,21 @@
 #pragma once
 // Camera images between sensor_msgs and the core: incoming images in any encoding the tracker
 // accepts (raw or compressed), and the grey keyframe images that travel in Keyframe messages.
-// The encoding checks are the core's (tracking/image_preparation.h), so the nodes and the
+// The encoding checks are the core's (features/image_preparation.h), so the nodes and the
 // offline runner accept and refuse the same images.
 
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <opencv2/core.hpp>
 
-#include "scale_drift_slam/tracking/image_preparation.h"
+#include "scale_drift_slam/features/image_preparation.h"
 
 namespace scale_drift_slam::ros_conversions {
 
 /// A camera image as the tracker takes it: pixels and their encoding.
 struct CameraImage {
   cv::Mat image;
-  tracking::PixelEncoding encoding = tracking::PixelEncoding::kMono8;
+  features::PixelEncoding encoding = features::PixelEncoding::kMono8;
 };
 
 /// Copies the pixels of a sensor_msgs/Image (mono8, mono16, bgr8, rgb8, bgra8, rgba8 and the

@@ -1,7 +1,7 @@
 #pragma once
 // The nodes' parameters, read from the private namespace and validated in one place. Each node
 // has a typed struct of its own settings; the SLAM's parameters are the core's
-// mapping::SlamParams: the YAML file `~config` (config/default.yaml layout; defaults without it),
+// system::SlamParams: the YAML file `~config` (config/default.yaml layout; defaults without it),
 // then individual overrides `~<section>/<key>` (e.g. `~tracker/good_inliers: 40`,
 // `~window_ba/window_size: 8`), parsed and validated by the core (io/slam_params_io.h). Any
 // problem is a std::runtime_error naming the parameter, which the node reports with ROS_FATAL
@@ -15,9 +15,9 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 
 #include "scale_drift_slam/geometry/camera_calibration.h"
-#include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/system/slam_params.h"
 
-namespace scale_drift_slam::ros_params {
+namespace scale_drift_slam::ros_conversions {
 
 struct FrameNames {
   std::string map = "map";
@@ -60,20 +60,20 @@ struct LoopClosureNodeParams {
 
 struct TrackingNodeConfig {
   TrackingNodeParams node;
-  mapping::SlamParams slam;
+  system::SlamParams slam;
   std::optional<geometry::CameraCalibration> calibration;  ///< From calibration_file.
   std::vector<std::string> unknown;  ///< Private parameters nobody reads (warned about).
 };
 
 struct MappingNodeConfig {
   MappingNodeParams node;
-  mapping::SlamParams slam;
+  system::SlamParams slam;
   std::vector<std::string> unknown;
 };
 
 struct LoopClosureNodeConfig {
   LoopClosureNodeParams node;
-  mapping::SlamParams slam;  ///< Uses the loop_closure, loop_verification, place_recognition parts.
+  system::SlamParams slam;  ///< Uses the loop_closure, loop_verification, place_recognition parts.
   std::vector<std::string> unknown;
 };
 
@@ -86,7 +86,7 @@ LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_p
 /// The SLAM parameters: ~config (or defaults), then the ~<section>/<key> overrides (place
 /// recognition's nested keys as ~place_recognition/<group>/<key>, e.g.
 /// ~place_recognition/appearance/max_features).
-mapping::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params);
+system::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params);
 
 /// All parameters of the node's private namespace (an empty struct when there are none).
 XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh);
@@ -96,4 +96,4 @@ std::string describe(const TrackingNodeConfig& config);
 std::string describe(const MappingNodeConfig& config);
 std::string describe(const LoopClosureNodeConfig& config);
 
-}  // namespace scale_drift_slam::ros_params
+}  // namespace scale_drift_slam::ros_conversions

@@ -1,7 +1,7 @@
 #pragma once
 // Conversions between the core's typed SLAM messages (map/keyframe_message.h, tracking/tracker.h)
 // and the package's ROS messages (msg/). Field for field: a keyframe or map update that goes
-// through a topic reaches the mapper or the tracker as the offline mapping::SlamSystem hands it
+// through a topic reaches the mapper or the tracker as the offline system::SlamSystem hands it
 // over, apart from map-point positions of MapUpdate (float32 on the wire). ROS-only fields
 // (header, session, mapper id, camera) are set and read by the nodes. Malformed messages are
 // refused with std::invalid_argument naming the problem, never half converted.

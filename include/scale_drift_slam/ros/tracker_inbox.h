@@ -2,7 +2,7 @@
 // What the tracking node's tracker receives from the other nodes: map updates (mapping node) and
 // relocalisation answers (loop-closure node). The subscriber thread converts and queues them; the
 // camera thread applies them between frames, in arrival order, exactly as
-// mapping::SlamSystem::drainTrackerInbox does offline, so the camera never waits for the other
+// system::SlamSystem::drainTrackerInbox does offline, so the camera never waits for the other
 // nodes. Also owns the map-version bookkeeping of a tracker session (ros/map_versions.h): messages
 // of another session are dropped, a restarted mapper continues above the tracker's version, stale
 // updates are skipped, and versions reported to other nodes are in the current mapper's numbering.
@@ -14,9 +14,9 @@
 
 #include "scale_drift_slam/MapUpdate.h"
 #include "scale_drift_slam/RelocalisationAnswer.h"
+#include "scale_drift_slam/common/message_queue.h"
 #include "scale_drift_slam/map/corrected_trajectory.h"
 #include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/map/message_queue.h"
 #include "scale_drift_slam/ros/map_versions.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
@@ -62,7 +62,7 @@ class TrackerInbox {
              Report* report);
   void apply(Answer& received, tracking::Tracker& tracker, Report* report);
 
-  map::MessageQueue<std::variant<Update, Answer>> queue_;
+  common::MessageQueue<std::variant<Update, Answer>> queue_;
   MapVersionTranslator versions_;  ///< Camera thread only.
 };
 

@@ -2,7 +2,7 @@
 // What the nodes show in rviz, built from core data: the map as a point cloud, keyframes and loop
 // edges as markers (mapping node), the camera path and the tracking node's debug image. Drawing
 // only; every position is taken from the map or the frame result as it is. Points and poses are
-// brought from the SLAM world into `map` by T_map_world (ros_frames::mapFromWorld).
+// brought from the SLAM world into `map` by T_map_world (ros_conversions::mapFromWorld).
 
 #include <optional>
 #include <string>
@@ -20,7 +20,7 @@
 #include "scale_drift_slam/map/map.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
-namespace scale_drift_slam::ros_visualization {
+namespace scale_drift_slam::ros_conversions {
 
 /// Every map point as x, y, z (float32) in the header's frame.
 sensor_msgs::PointCloud2 mapCloud(const map::Map& map, const geometry::SE3& T_map_world,
@@ -71,4 +71,4 @@ visualization_msgs::MarkerArray deleteAllMarkers(const std_msgs::Header& header)
 /// line of text (state, inliers, matches, time, message).
 cv::Mat debugImage(const cv::Mat& grey, const tracking::FrameResult& result);
 
-}  // namespace scale_drift_slam::ros_visualization
+}  // namespace scale_drift_slam::ros_conversions

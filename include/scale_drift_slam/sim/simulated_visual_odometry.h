@@ -15,9 +15,9 @@
 #include <unordered_map>
 #include <vector>
 
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/map/map.h"
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/mapping/window_bundle_adjustment.h"
 #include "scale_drift_slam/sim/simulated_world.h"
 #include "scale_drift_slam/tracking/inverse_depth_filter.h"
@@ -27,7 +27,7 @@ namespace scale_drift_slam::sim {
 
 struct SimulatedVoParams {
   mapping::WindowBundleAdjustmentParams window;
-  mapping::MotionOnlyBundleAdjustmentParams motion;
+  features::MotionOnlyBundleAdjustmentParams motion;
   tracking::InverseDepthFilterParams filter;
   tracking::KeyframeRuleParams keyframe_rule;
   int local_map_keyframes = 10;         ///< Points seen by one of the newest this many are tracked.

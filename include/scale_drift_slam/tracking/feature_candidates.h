@@ -12,12 +12,12 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/features/active_search.h"
+#include "scale_drift_slam/features/feature_detection.h"
+#include "scale_drift_slam/features/image_preparation.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/tracking/active_search.h"
-#include "scale_drift_slam/tracking/feature_detection.h"
-#include "scale_drift_slam/tracking/image_preparation.h"
 #include "scale_drift_slam/tracking/inverse_depth_filter.h"
 
 namespace scale_drift_slam::tracking {
@@ -35,14 +35,14 @@ struct FeatureCandidateParams {
 struct PromotedFeature {
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   map::KeyframeId origin = 0;
-  std::vector<PromotionView> views;  ///< Origin first; the newest keyframe last.
-  PointAppearance appearance;        ///< Cut from the origin keyframe.
+  std::vector<PromotionView> views;      ///< Origin first; the newest keyframe last.
+  features::PointAppearance appearance;  ///< Cut from the origin keyframe.
 };
 
 class FeatureCandidates {
  public:
-  FeatureCandidates(const FeatureCandidateParams& params, const FeatureDetectionParams& detection,
-                    double focal_length_px);
+  FeatureCandidates(const FeatureCandidateParams& params,
+                    const features::FeatureDetectionParams& detection, double focal_length_px);
 
   /// Current pixels of the candidates, to be moved by the frame's optical flow.
   std::vector<cv::Point2f> pixels() const;
@@ -61,9 +61,9 @@ class FeatureCandidates {
 
   /// Starts new candidates at the keyframe, away from `occupied` pixels (tracked points and the
   /// other candidates). `scene_depth` gives the filters' start value (its information is zero).
-  int spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf_world, const ImagePyramid& image,
-            std::vector<Eigen::Vector2d> occupied, double scene_depth,
-            const geometry::CameraModel& camera);
+  int spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf_world,
+            const features::ImagePyramid& image, std::vector<Eigen::Vector2d> occupied,
+            double scene_depth, const geometry::CameraModel& camera);
 
   /// Keeps origin and view poses in step with the mapper's corrections.
   void apply(const map::MapUpdate& update);
@@ -73,7 +73,7 @@ class FeatureCandidates {
  private:
   struct Candidate {
     InverseDepthFilter filter;
-    PointAppearance appearance;
+    features::PointAppearance appearance;
     Eigen::Vector2d px = Eigen::Vector2d::Zero();  ///< Pixel in the latest frame.
     Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< Its normalised coordinates.
     std::vector<PromotionView> views;              ///< Origin first.
@@ -86,7 +86,7 @@ class FeatureCandidates {
            const geometry::SE3* T_cur_world, const geometry::CameraModel& camera);
 
   FeatureCandidateParams params_;
-  FeatureDetectionParams detection_;
+  features::FeatureDetectionParams detection_;
   double focal_length_px_;
   std::vector<Candidate> candidates_;
 };

@@ -13,10 +13,10 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/feature_detection.h"
+#include "scale_drift_slam/features/image_preparation.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/geometry/se3.h"
-#include "scale_drift_slam/tracking/feature_detection.h"
-#include "scale_drift_slam/tracking/image_preparation.h"
 #include "scale_drift_slam/tracking/optical_flow.h"
 #include "scale_drift_slam/tracking/two_view_reconstruction.h"
 
@@ -41,7 +41,7 @@ struct InitialMap {
   std::vector<Eigen::Vector2d> xy_first, xy_second;
   std::vector<Eigen::Vector3d> p_first;
   std::vector<bool> triangulated;
-  ImagePyramid first_image;
+  features::ImagePyramid first_image;
   bool used_homography = false;
 };
 
@@ -50,11 +50,11 @@ class MapInitializer {
   /// `flow` gives the Lucas-Kanade window and levels (the pyramids are padded for that window);
   /// the initializer always uses Lucas-Kanade with a forward-backward check.
   MapInitializer(std::shared_ptr<const geometry::CameraModel> camera,
-                 const InitializerParams& params, const FeatureDetectionParams& features,
+                 const InitializerParams& params, const features::FeatureDetectionParams& features,
                  const OpticalFlowParams& flow = {});
 
   /// Feeds the next frame; returns the initial map once two views reconstruct.
-  std::optional<InitialMap> addFrame(double timestamp, const ImagePyramid& image);
+  std::optional<InitialMap> addFrame(double timestamp, const features::ImagePyramid& image);
   /// Starts over with the next frame as the reference.
   void reset();
   /// Why the last frame did not initialise (for logs).
@@ -62,15 +62,15 @@ class MapInitializer {
   int numTracks() const { return static_cast<int>(current_px_.size()); }
 
  private:
-  void startReference(double timestamp, const ImagePyramid& image);
+  void startReference(double timestamp, const features::ImagePyramid& image);
 
   std::shared_ptr<const geometry::CameraModel> camera_;
   InitializerParams params_;
-  FeatureDetectionParams features_;
+  features::FeatureDetectionParams features_;
   OpticalFlow flow_;
   bool has_reference_ = false;
   double reference_timestamp_ = 0.0;
-  ImagePyramid reference_image_, previous_image_;
+  features::ImagePyramid reference_image_, previous_image_;
   std::vector<cv::Point2f> reference_px_, current_px_;
   int frames_since_reference_ = 0;
   std::string status_ = "no frame yet";

@@ -12,10 +12,10 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/features/image_preparation.h"
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/geometry/se3.h"
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
-#include "scale_drift_slam/tracking/image_preparation.h"
 #include "scale_drift_slam/tracking/optical_flow.h"
 
 namespace scale_drift_slam::tracking {
@@ -48,15 +48,16 @@ struct FlowSeed {
 class MotionPriorEstimator {
  public:
   MotionPriorEstimator(const MotionPriorParams& params,
-                       const mapping::MotionOnlyBundleAdjustmentParams& motion_ba);
+                       const features::MotionOnlyBundleAdjustmentParams& motion_ba);
 
   /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
   /// `extra_tracked` / `extra_ok`) from `previous` into `current` in one flow call and estimates
   /// the prior. `T_guess` is the constant-velocity guess, `scene_depth` scales the floors.
-  MotionPrior estimate(const ImagePyramid& previous, const ImagePyramid& current,
-                       const std::vector<FlowSeed>& seeds, const std::vector<cv::Point2f>& extra_px,
-                       const geometry::SE3& T_guess, double scene_depth,
-                       const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
+  MotionPrior estimate(const features::ImagePyramid& previous,
+                       const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
+                       const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
+                       double scene_depth, const geometry::CameraModel& camera,
+                       std::vector<cv::Point2f>* extra_tracked,
                        std::vector<unsigned char>* extra_ok);
 
   /// The fallback: the guess with the wide uncertainty.
@@ -73,13 +74,13 @@ class MotionPriorEstimator {
   /// pose at the last frame by motion-only BA from `T_guess`; only its inliers are returned. For
   /// a relocalisation answered a few frames after the frame it was asked for. Nothing when fewer
   /// than min_tracks points survive.
-  std::optional<Carried> carry(const std::vector<ImagePyramid>& frames,
+  std::optional<Carried> carry(const std::vector<features::ImagePyramid>& frames,
                                const std::vector<FlowSeed>& seeds, const geometry::SE3& T_guess,
                                const geometry::CameraModel& camera);
 
  private:
   MotionPriorParams params_;
-  mapping::MotionOnlyBundleAdjustmentParams motion_ba_;
+  features::MotionOnlyBundleAdjustmentParams motion_ba_;
   OpticalFlow flow_;
 };
 

@@ -12,7 +12,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "scale_drift_slam/tracking/image_preparation.h"
+#include "scale_drift_slam/features/image_preparation.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -40,17 +40,17 @@ class OpticalFlow {
 
   /// Moves `from` (pixels in `previous`) into `current`; `ok[i]` says whether point i was
   /// tracked (inside the image, converged, consistent). Outputs have the size of `from`.
-  void track(const ImagePyramid& previous, const ImagePyramid& current,
+  void track(const features::ImagePyramid& previous, const features::ImagePyramid& current,
              const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
              std::vector<unsigned char>* ok);
 
   const OpticalFlowParams& params() const { return params_; }
 
  private:
-  void trackLucasKanade(const ImagePyramid& previous, const ImagePyramid& current,
-                        const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
-                        std::vector<unsigned char>* ok) const;
-  void trackDis(const ImagePyramid& previous, const ImagePyramid& current,
+  void trackLucasKanade(const features::ImagePyramid& previous,
+                        const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
+                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
+  void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
                 std::vector<unsigned char>* ok);
 

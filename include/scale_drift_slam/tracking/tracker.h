@@ -14,10 +14,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/features/active_search.h"
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
-#include "scale_drift_slam/tracking/active_search.h"
 #include "scale_drift_slam/tracking/feature_candidates.h"
 #include "scale_drift_slam/tracking/keyframe_rule.h"
 #include "scale_drift_slam/tracking/map_initializer.h"
@@ -45,11 +45,11 @@ struct TrackerParams {
   /// the tracker initialises again (FrameResult::map_restarted). 0 keyframes: never.
   int restart_after_lost_frames = 15;
   int restart_below_keyframes = 30;
-  FeatureDetectionParams features;
+  features::FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
-  ActiveSearchParams search;
-  mapping::MotionOnlyBundleAdjustmentParams motion_ba;
+  features::ActiveSearchParams search;
+  features::MotionOnlyBundleAdjustmentParams motion_ba;
   FeatureCandidateParams candidates;
   KeyframeRuleParams keyframes;
   /// Throws std::invalid_argument naming the first bad value.
@@ -96,7 +96,8 @@ class Tracker {
 
   /// Processes one frame. Never throws for a bad frame (black, blank, wrong size, wrong
   /// encoding): the result says it was rejected and why.
-  FrameResult processFrame(double timestamp, const cv::Mat& image, PixelEncoding encoding);
+  FrameResult processFrame(double timestamp, const cv::Mat& image,
+                           features::PixelEncoding encoding);
   /// Applies a mapper correction to the local map (call between frames).
   void applyMapUpdate(const map::MapUpdate& update);
   /// Takes the loop closer's answer to the last relocalisation request (call between frames).
@@ -115,26 +116,29 @@ class Tracker {
     Eigen::Vector2d xy;
   };
 
-  void initialise(double timestamp, const ImagePyramid& image, FrameResult* result);
-  void track(double timestamp, const ImagePyramid& image, FrameResult* result);
-  MotionPrior estimatePrior(const ImagePyramid& image, std::vector<cv::Point2f>* candidate_px,
+  void initialise(double timestamp, const features::ImagePyramid& image, FrameResult* result);
+  void track(double timestamp, const features::ImagePyramid& image, FrameResult* result);
+  MotionPrior estimatePrior(const features::ImagePyramid& image,
+                            std::vector<cv::Point2f>* candidate_px,
                             std::vector<unsigned char>* candidate_ok);
-  std::vector<SearchMatch> searchLocalMap(const MotionPrior& prior, const ImagePyramid& image,
-                                          std::vector<map::PointId>* ids);
+  std::vector<features::SearchMatch> searchLocalMap(const MotionPrior& prior,
+                                                    const features::ImagePyramid& image,
+                                                    std::vector<map::PointId>* ids);
   /// Motion-only BA on the found matches; fills the inliers and the counts of `result`.
   geometry::SE3 solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
-                          const std::vector<SearchMatch>& matches,
+                          const std::vector<features::SearchMatch>& matches,
                           std::vector<Measurement>* inliers, FrameResult* result);
-  void dropKeyframe(double timestamp, const ImagePyramid& image,
+  void dropKeyframe(double timestamp, const features::ImagePyramid& image,
                     const std::vector<Measurement>& inliers, FrameResult* result);
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
-                           PointAppearance appearance, map::KeyframeMessage* message);
+                           features::PointAppearance appearance, map::KeyframeMessage* message);
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
-                                    const ImagePyramid& image);
+                                    const features::ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
   void rejectFrame(const std::string& reason, FrameResult* result);
-  void requestRelocalisation(double timestamp, const ImagePyramid& image, FrameResult* result);
+  void requestRelocalisation(double timestamp, const features::ImagePyramid& image,
+                             FrameResult* result);
   /// Counts the frames lost in a row and restarts a young map lost too long.
   void restartYoungLostMap(FrameResult* result);
 
@@ -147,7 +151,7 @@ class Tracker {
   TrackingMap map_;
   TrackingState state_ = TrackingState::kInitializing;
 
-  ImagePyramid previous_image_;
+  features::ImagePyramid previous_image_;
   geometry::SE3 T_previous_world_, T_before_previous_world_;
   std::vector<Measurement> previous_measurements_;
   double last_scene_depth_ = 1.0;
@@ -163,7 +167,7 @@ class Tracker {
     std::uint64_t frame_index = 0;
     /// The requested frame, then every frame tracked (in vain) since: the answer's points are
     /// carried through them by flow.
-    std::vector<ImagePyramid> frames;
+    std::vector<features::ImagePyramid> frames;
   };
   std::optional<PendingRelocalisation> relocalisation_;  ///< The request outstanding.
   bool resume_from_relocalisation_ = false;

@@ -12,10 +12,10 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/active_search.h"
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/map/map.h"
-#include "scale_drift_slam/tracking/active_search.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -23,7 +23,7 @@ struct TrackedPoint {
   map::PointId id = 0;
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   map::KeyframeId reference_keyframe = 0;
-  PointAppearance appearance;
+  features::PointAppearance appearance;
   int times_searched = 0;                 ///< Frames in which active search tried to match it.
   int times_found = 0;                    ///< ...and matched it.
   std::uint64_t last_selected_frame = 0;  ///< Bookkeeping of localPoints().

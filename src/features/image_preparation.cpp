@@ -1,11 +1,11 @@
-#include "scale_drift_slam/tracking/image_preparation.h"
+#include "scale_drift_slam/features/image_preparation.h"
 
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 PixelEncoding parsePixelEncoding(const std::string& name) {
   if (name == "mono8" || name == "8UC1") return PixelEncoding::kMono8;
@@ -138,4 +138,4 @@ std::string frameProblem(const cv::Mat& grey, int expected_width, int expected_h
   return "";
 }
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -12,7 +12,7 @@
 #include <mutex>
 #include <optional>
 
-namespace scale_drift_slam::map {
+namespace scale_drift_slam::common {
 
 template <typename T>
 class MessageQueue {
@@ -86,4 +86,4 @@ class MessageQueue {
   bool closed_ = false;
 };
 
-}  // namespace scale_drift_slam::map
+}  // namespace scale_drift_slam::common

@@ -1,4 +1,4 @@
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 
 #include <array>
 #include <cmath>
@@ -10,9 +10,9 @@
 
 #include "scale_drift_slam/common/stopwatch.h"
 
-#include "reprojection_cost.h"
+#include "scale_drift_slam/features/reprojection_cost.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::features {
 
 void MotionOnlyBundleAdjustmentParams::validate() const {
   auto fail = [](const std::string& what) {
@@ -61,14 +61,14 @@ NormalEquations evaluate(const MotionOnlyInput& input, const geometry::SE3& T, d
   Eigen::Vector2d r;
   Eigen::Matrix<double, 2, 6> J;
   for (const PoseObservation& o : input.observations) {
-    if (!internal::reprojectionResidual(T, o.p_world, o.xy, input.focal_length_px, &r,
+    if (!features::reprojectionResidual(T, o.p_world, o.xy, input.focal_length_px, &r,
                                         with_jacobians ? &J : nullptr, nullptr)) {
-      ne.cost += internal::pseudoHuber(kBehindErrorPx * kBehindErrorPx, width);
+      ne.cost += features::pseudoHuber(kBehindErrorPx * kBehindErrorPx, width);
       continue;
     }
     ++ne.num_in_front;
     const double s = r.squaredNorm();
-    ne.cost += internal::pseudoHuber(s, width);
+    ne.cost += features::pseudoHuber(s, width);
     if (!with_jacobians) continue;
     const double w = 1.0 / std::sqrt(1.0 + s / (width * width));
     ne.H.noalias() += w * J.transpose() * J;
@@ -125,15 +125,15 @@ geometry::SE3 ceresLm(const MotionOnlyInput& input, const MotionOnlyBundleAdjust
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::SoftLOneLoss pseudo_huber(params.huber_width_px);  // see internal::pseudoHuber
-  internal::SE3LeftManifold manifold;
+  ceres::SoftLOneLoss pseudo_huber(params.huber_width_px);  // see features::pseudoHuber
+  features::SE3LeftManifold manifold;
   std::array<double, 7> pose;
   input.T_cam_world_guess.toData(pose.data());
   std::vector<Eigen::Vector3d> points;
-  std::deque<internal::ReprojectionCost> costs;  // stable addresses, no copies
+  std::deque<features::ReprojectionCost> costs;  // stable addresses, no copies
   points.reserve(input.observations.size());
   for (const PoseObservation& o : input.observations) {
-    if (!((input.T_cam_world_guess * o.p_world).z() > internal::kMinDepth)) continue;
+    if (!((input.T_cam_world_guess * o.p_world).z() > features::kMinDepth)) continue;
     points.push_back(o.p_world);
     costs.emplace_back(o.xy, input.focal_length_px);
     problem.AddResidualBlock(&costs.back(), &pseudo_huber, pose.data(), points.back().data());
@@ -182,9 +182,9 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   for (std::size_t i = 0; i < input.observations.size(); ++i) {
     const PoseObservation& o = input.observations[i];
     Eigen::Vector2d r0 = Eigen::Vector2d::Zero(), r1 = Eigen::Vector2d::Zero();
-    const bool ok0 = internal::reprojectionResidual(input.T_cam_world_guess, o.p_world, o.xy,
+    const bool ok0 = features::reprojectionResidual(input.T_cam_world_guess, o.p_world, o.xy,
                                                     input.focal_length_px, &r0, nullptr, nullptr);
-    const bool ok1 = internal::reprojectionResidual(result.T_cam_world, o.p_world, o.xy,
+    const bool ok1 = features::reprojectionResidual(result.T_cam_world, o.p_world, o.xy,
                                                     input.focal_length_px, &r1, nullptr, nullptr);
     result.inlier[i] = ok1 && r1.norm() < params.inlier_threshold_px;
     if (!result.inlier[i]) continue;
@@ -200,4 +200,4 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   return result;
 }
 
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::features

@@ -13,12 +13,12 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/features/feature_detection.h"
+#include "scale_drift_slam/features/image_preparation.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/geometry/se3.h"
-#include "scale_drift_slam/tracking/feature_detection.h"
-#include "scale_drift_slam/tracking/image_preparation.h"
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 struct ActiveSearchParams {
   int template_radius = 4;           ///< Template of (2r+1)^2 pixels.
@@ -86,4 +86,4 @@ CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& pa
 /// NCC of two equally sized float patches, in [-1, 1]; -1 when either has no texture.
 double normalizedCrossCorrelation(const float* a, const float* b, int n);
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

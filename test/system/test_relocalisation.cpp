@@ -11,40 +11,40 @@
 #include "../tracking/synthetic_images.h"
 #include "scale_drift_slam/evaluation/alignment.h"
 #include "scale_drift_slam/geometry/so3.h"
-#include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/system/slam_system.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::system {
 namespace {
 
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(450.0);
+  return test::pinholeCamera(450.0);
 }
 
 geometry::SE3 cameraPose(int k) {
-  return tracking::test::sweepPose(k);
+  return test::sweepPose(k);
 }
 
 /// What the camera sees of the room at pose k of the sweep.
-cv::Mat renderView(const std::vector<tracking::test::TexturedPlane>& room,
-                   const geometry::CameraModel& cam, int k) {
-  return tracking::test::renderPlanes(room, cam.K(), cameraPose(k).inverse(), kWidth, kHeight);
+cv::Mat renderView(const std::vector<test::TexturedPlane>& room, const geometry::CameraModel& cam,
+                   int k) {
+  return test::renderPlanes(room, cam.K(), cameraPose(k).inverse(), kWidth, kHeight);
 }
 
 TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
-  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
-  SlamParams params;
+  system::SlamParams params;
   params.mapping_thread = false;
   params.loop.recognition.online_training_keyframes = 5;  // a short run: learn the words early
-  SlamSystem slam(cam, params);
+  system::SlamSystem slam(cam, params);
   const auto render = [&](int k) { return renderView(room, *cam, k); };
   std::vector<Eigen::Vector3d> estimate, truth;
   for (int k = 0; k < 80; ++k) {
     const tracking::FrameResult r =
-        slam.processFrame(0.1 * k, render(k), tracking::PixelEncoding::kMono8);
+        slam.processFrame(0.1 * k, render(k), features::PixelEncoding::kMono8);
     if (!r.has_pose) continue;
     estimate.push_back(r.T_cam_world.inverseTranslation());
     truth.push_back(cameraPose(k).translation());
@@ -56,7 +56,7 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   const cv::Mat black = cv::Mat::zeros(kHeight, kWidth, CV_8UC1);
   for (int i = 0; i < 5; ++i) {
     const tracking::FrameResult r =
-        slam.processFrame(8.0 + 0.1 * i, black, tracking::PixelEncoding::kMono8);
+        slam.processFrame(8.0 + 0.1 * i, black, features::PixelEncoding::kMono8);
     EXPECT_TRUE(r.rejected);
     if (i >= 2) {
       EXPECT_EQ(r.state, tracking::TrackingState::kLost) << r.message;
@@ -67,7 +67,7 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
   double worst_error = 0.0;
   for (int k = 30; k < 45; ++k) {
     const tracking::FrameResult r =
-        slam.processFrame(9.0 + 0.1 * k, render(k), tracking::PixelEncoding::kMono8);
+        slam.processFrame(9.0 + 0.1 * k, render(k), features::PixelEncoding::kMono8);
     if (first_relocalised < 0 && r.relocalised) first_relocalised = k;
     if (first_relocalised < 0 || !r.has_pose) continue;
     EXPECT_NE(r.state, tracking::TrackingState::kLost) << "frame " << k << ": " << r.message;
@@ -86,18 +86,18 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
 // (appending the new frames to the old request would leave a gap of tracked frames that a late
 // answer would be carried across by flow), and the old request's answer is refused.
 TEST(Relocalisation, ARequestEndsWhenTrackingRecoversByItself) {
-  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
   tracking::Tracker tracker(cam, tracking::TrackerParams{});
   const auto process = [&](double t, const cv::Mat& image) {
-    return tracker.processFrame(t, image, tracking::PixelEncoding::kMono8);
+    return tracker.processFrame(t, image, features::PixelEncoding::kMono8);
   };
   const auto render = [&](int k) { return renderView(room, *cam, k); };
   for (int k = 0; k < 30; ++k)
     process(0.1 * k, render(k));
   ASSERT_EQ(tracker.state(), tracking::TrackingState::kGood);
   // Something else entirely (textured, so not rejected as blank): lost, a request goes out.
-  const cv::Mat elsewhere = tracking::test::texturedImage(kWidth, kHeight, 99);
+  const cv::Mat elsewhere = test::texturedImage(kWidth, kHeight, 99);
   const tracking::FrameResult first_loss = process(3.0, elsewhere);
   ASSERT_EQ(first_loss.state, tracking::TrackingState::kLost) << first_loss.message;
   ASSERT_TRUE(first_loss.relocalisation_request.has_value());
@@ -122,15 +122,15 @@ TEST(Relocalisation, ARequestEndsWhenTrackingRecoversByItself) {
 // lost frames the tracker discards it and initialises again; the mapper and the loop closer follow,
 // and the new map is built from the new keyframes only.
 TEST(Relocalisation, AYoungMapLostTooLongIsDiscardedAndANewOneStarts) {
-  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
   for (const bool thread : {false, true}) {
-    SlamParams params;
+    system::SlamParams params;
     params.mapping_thread = thread;
     params.tracker.restart_after_lost_frames = 6;
-    SlamSystem slam(cam, params);
+    system::SlamSystem slam(cam, params);
     const auto process = [&](double t, const cv::Mat& image) {
-      return slam.processFrame(t, image, tracking::PixelEncoding::kMono8);
+      return slam.processFrame(t, image, features::PixelEncoding::kMono8);
     };
     const auto render = [&](int k) { return renderView(room, *cam, k); };
     for (int k = 0; k < 30; ++k)
@@ -179,4 +179,4 @@ TEST(Relocalisation, AYoungMapLostTooLongIsDiscardedAndANewOneStarts) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::system

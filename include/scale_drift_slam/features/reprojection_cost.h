@@ -9,7 +9,7 @@
 
 #include "scale_drift_slam/geometry/se3.h"
 
-namespace scale_drift_slam::mapping::internal {
+namespace scale_drift_slam::features {
 
 /// The SE(3) pose stored as 7 numbers (qx qy qz qw tx ty tz, SE3::toData) with a 6-DoF left
 /// update T <- exp(delta) T (doc/algorithm.md, "Lie groups").
@@ -141,4 +141,4 @@ inline double pseudoHuber(double squared_norm, double width) {
   return 2.0 * width * width * (std::sqrt(1.0 + squared_norm / (width * width)) - 1.0);
 }
 
-}  // namespace scale_drift_slam::mapping::internal
+}  // namespace scale_drift_slam::features

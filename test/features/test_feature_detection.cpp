@@ -6,10 +6,10 @@
 
 #include <gtest/gtest.h>
 
-#include "scale_drift_slam/tracking/feature_detection.h"
-#include "synthetic_images.h"
+#include "../tracking/synthetic_images.h"
+#include "scale_drift_slam/features/feature_detection.h"
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 namespace {
 
 TEST(FeatureDetection, QuadtreeSpreadsClusteredCorners) {
@@ -78,4 +78,4 @@ TEST(FeatureDetection, CornerGridQueriesTheBox) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -21,23 +21,16 @@
 #include <variant>
 #include <vector>
 
+#include "scale_drift_slam/common/message_queue.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/map/corrected_trajectory.h"
 #include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/map/message_queue.h"
 #include "scale_drift_slam/mapping/mapper.h"
+#include "scale_drift_slam/system/slam_params.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
-namespace scale_drift_slam::mapping {
-
-struct SlamParams {
-  tracking::TrackerParams tracker;
-  MapperParams mapper;
-  loop::LoopCloserParams loop;
-  bool mapping_thread = true;  ///< Mapper and loop closer on their own threads.
-  void validate() const;
-};
+namespace scale_drift_slam::system {
 
 /// Figures of the background work; complete after finish().
 struct BackgroundTimes {
@@ -57,7 +50,7 @@ class SlamSystem {
   /// Applies what arrived for the tracker, tracks the frame, hands keyframes and relocalisation
   /// requests on.
   tracking::FrameResult processFrame(double timestamp, const cv::Mat& image,
-                                     tracking::PixelEncoding encoding);
+                                     features::PixelEncoding encoding);
   /// Lets the mapper and the loop closer finish their queues, stops the threads and applies the
   /// last updates to the trajectory. Idempotent.
   void finish();
@@ -68,7 +61,7 @@ class SlamSystem {
   /// Every tracked frame, corrected by the loop closures applied so far.
   const map::CorrectedTrajectory& trajectory() const { return trajectory_; }
   /// The loops the loop closer verified, as the mapper applied (or refused) them.
-  std::vector<LoopCorrectionStatistics> loops() const;
+  std::vector<mapping::LoopCorrectionStatistics> loops() const;
   BackgroundTimes backgroundTimes() const;
   int relocalisations() const;
   /// Young lost maps the tracker discarded to initialise again.
@@ -103,14 +96,14 @@ class SlamSystem {
   SlamParams params_;
   std::shared_ptr<const geometry::CameraModel> camera_;
   tracking::Tracker tracker_;
-  Mapper mapper_;
+  mapping::Mapper mapper_;
   loop::LoopCloser loop_closer_;
   map::CorrectedTrajectory trajectory_;
-  map::MessageQueue<MapperInput> mapper_inbox_;
-  map::MessageQueue<LoopInput> loop_inbox_;
-  map::MessageQueue<TrackerInput> tracker_inbox_;
+  common::MessageQueue<MapperInput> mapper_inbox_;
+  common::MessageQueue<LoopInput> loop_inbox_;
+  common::MessageQueue<TrackerInput> tracker_inbox_;
   mutable std::mutex record_mutex_;  ///< Guards the records below (written by the threads).
-  std::vector<LoopCorrectionStatistics> loops_;
+  std::vector<mapping::LoopCorrectionStatistics> loops_;
   BackgroundTimes times_;
   std::vector<std::string> log_;
   int relocalisations_ = 0;
@@ -121,4 +114,4 @@ class SlamSystem {
   bool finished_ = false;
 };
 
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::system

@@ -6,15 +6,15 @@
 
 #include <gtest/gtest.h>
 
+#include "../tracking/synthetic_images.h"
+#include "scale_drift_slam/features/active_search.h"
 #include "scale_drift_slam/geometry/so3.h"
-#include "scale_drift_slam/tracking/active_search.h"
-#include "synthetic_images.h"
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 namespace {
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(500.0);
+  return test::pinholeCamera(500.0);
 }
 
 struct WallScene {
@@ -134,4 +134,4 @@ TEST(ActiveSearch, NccIsInvariantToGainAndBias) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -12,19 +12,19 @@
 #include "../tracking/synthetic_images.h"
 #include "scale_drift_slam/evaluation/alignment.h"
 #include "scale_drift_slam/geometry/so3.h"
-#include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/system/slam_system.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::system {
 namespace {
 
 constexpr int kWidth = 640, kHeight = 480;
 
 std::shared_ptr<const geometry::CameraModel> camera() {
-  return tracking::test::pinholeCamera(450.0);
+  return test::pinholeCamera(450.0);
 }
 
 geometry::SE3 cameraPose(int k) {
-  return tracking::test::sweepPose(k);
+  return test::sweepPose(k);
 }
 
 struct Outcome {
@@ -34,7 +34,7 @@ struct Outcome {
 };
 
 Outcome runRoom(int frames, bool mapping_thread, bool inject_bad_frames) {
-  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
   SlamParams params;
   params.mapping_thread = mapping_thread;
@@ -44,21 +44,21 @@ Outcome runRoom(int frames, bool mapping_thread, bool inject_bad_frames) {
   for (int k = 0; k < frames; ++k) {
     const geometry::SE3 T_world_cam = cameraPose(k);
     const cv::Mat image =
-        tracking::test::renderPlanes(room, cam->K(), T_world_cam.inverse(), kWidth, kHeight);
+        test::renderPlanes(room, cam->K(), T_world_cam.inverse(), kWidth, kHeight);
     if (inject_bad_frames && k == frames / 2) {
       EXPECT_TRUE(slam.processFrame(k - 0.5, cv::Mat::zeros(kHeight, kWidth, CV_8UC1),
-                                    tracking::PixelEncoding::kMono8)
+                                    features::PixelEncoding::kMono8)
                       .rejected);
       EXPECT_TRUE(slam.processFrame(k - 0.4, cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(255)),
-                                    tracking::PixelEncoding::kMono8)
+                                    features::PixelEncoding::kMono8)
                       .rejected);
       EXPECT_TRUE(
-          slam.processFrame(k - 0.3, cv::Mat::zeros(2, 3, CV_8UC1), tracking::PixelEncoding::kMono8)
+          slam.processFrame(k - 0.3, cv::Mat::zeros(2, 3, CV_8UC1), features::PixelEncoding::kMono8)
               .rejected);
-      EXPECT_TRUE(slam.processFrame(k - 0.2, image, tracking::PixelEncoding::kBgr8).rejected);
+      EXPECT_TRUE(slam.processFrame(k - 0.2, image, features::PixelEncoding::kBgr8).rejected);
     }
     const tracking::FrameResult r =
-        slam.processFrame(0.1 * k, image, tracking::PixelEncoding::kMono8);
+        slam.processFrame(0.1 * k, image, features::PixelEncoding::kMono8);
     ++o.frames;
     o.lost += r.state == tracking::TrackingState::kLost;
     if (!r.has_pose) continue;
@@ -103,23 +103,23 @@ TEST(SlamSystem, MappingThreadGivesTheSameQuality) {
 }
 
 TEST(SlamSystem, SaysWhenLostAndAddsNoKeyframesThen) {
-  const auto room = tracking::test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
   SlamParams params;
   params.mapping_thread = false;
   SlamSystem slam(cam, params);
   auto render = [&](int k) {
-    return tracking::test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
+    return test::renderPlanes(room, cam->K(), cameraPose(k).inverse(), kWidth, kHeight);
   };
   for (int k = 0; k < 40; ++k)
-    slam.processFrame(0.1 * k, render(k), tracking::PixelEncoding::kMono8);
+    slam.processFrame(0.1 * k, render(k), features::PixelEncoding::kMono8);
   ASSERT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
   const std::size_t keyframes = slam.tracker().trackingMap().numKeyframes();
   // A different, textured view (the camera covered, or a cut in the video): nothing matches.
   for (int k = 0; k < 5; ++k) {
     const tracking::FrameResult r =
-        slam.processFrame(4.0 + 0.1 * k, tracking::test::texturedImage(kWidth, kHeight, 99 + k),
-                          tracking::PixelEncoding::kMono8);
+        slam.processFrame(4.0 + 0.1 * k, test::texturedImage(kWidth, kHeight, 99 + k),
+                          features::PixelEncoding::kMono8);
     EXPECT_EQ(r.state, tracking::TrackingState::kLost);
     EXPECT_FALSE(r.has_pose);
     EXPECT_TRUE(r.keyframes.empty());
@@ -129,10 +129,10 @@ TEST(SlamSystem, SaysWhenLostAndAddsNoKeyframesThen) {
   // Back to the room where it was lost: the wide prior around the last pose finds it again.
   bool recovered = false;
   for (int k = 40; k < 50 && !recovered; ++k) {
-    recovered = slam.processFrame(0.1 * k, render(k), tracking::PixelEncoding::kMono8).has_pose;
+    recovered = slam.processFrame(0.1 * k, render(k), features::PixelEncoding::kMono8).has_pose;
   }
   EXPECT_TRUE(recovered);
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::system

@@ -8,7 +8,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 struct FeatureDetectionParams {
   int fast_threshold = 20;     ///< FAST intensity threshold for new features.
@@ -50,4 +50,4 @@ class CornerGrid {
   std::vector<std::vector<int>> cells_;
 };
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -1,16 +1,10 @@
-#include "scale_drift_slam/mapping/slam_system.h"
+#include "scale_drift_slam/system/slam_system.h"
 
 #include <utility>
 
 #include "scale_drift_slam/common/stopwatch.h"
 
-namespace scale_drift_slam::mapping {
-
-void SlamParams::validate() const {
-  tracker.validate();
-  mapper.validate();
-  loop.validate();
-}
+namespace scale_drift_slam::system {
 
 namespace {
 
@@ -60,7 +54,7 @@ void SlamSystem::finish() {
 }
 
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
-                                               tracking::PixelEncoding encoding) {
+                                               features::PixelEncoding encoding) {
   drainTrackerInbox();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
   if (result.map_restarted) {
@@ -144,13 +138,13 @@ void SlamSystem::handle(MapperInput input) {
   }
   if (std::holds_alternative<MapRestart>(input)) {
     ++mapper_generation_;
-    mapper_ = Mapper(params_.mapper, focalOf(camera_));
+    mapper_ = mapping::Mapper(params_.mapper, focalOf(camera_));
     log("map restarted: the tracker discarded a young map it was lost in");
     return;
   }
   const auto& [generation, constraint] = std::get<OfGeneration<loop::LoopConstraint>>(input);
   if (generation != mapper_generation_) return;  // found in a discarded map
-  LoopCorrectionStatistics c;
+  mapping::LoopCorrectionStatistics c;
   map::MapUpdate update = mapper_.closeLoop(constraint, &c);
   log(c.describe());
   {
@@ -207,7 +201,7 @@ std::vector<std::string> SlamSystem::takeLog() {
   return std::exchange(log_, {});
 }
 
-std::vector<LoopCorrectionStatistics> SlamSystem::loops() const {
+std::vector<mapping::LoopCorrectionStatistics> SlamSystem::loops() const {
   std::lock_guard<std::mutex> lock(record_mutex_);
   return loops_;
 }
@@ -222,4 +216,4 @@ int SlamSystem::relocalisations() const {
   return relocalisations_;
 }
 
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::system

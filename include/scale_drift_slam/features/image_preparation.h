@@ -10,7 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 /// Pixel layouts accepted from cameras and bags (sensor_msgs/image_encodings names).
 enum class PixelEncoding { kMono8, kMono16, kBgr8, kRgb8, kBgra8, kRgba8 };
@@ -48,4 +48,4 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21)
 std::string frameProblem(const cv::Mat& grey, int expected_width, int expected_height,
                          double min_contrast);
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -4,10 +4,10 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "scale_drift_slam/tracking/image_preparation.h"
-#include "synthetic_images.h"
+#include "../tracking/synthetic_images.h"
+#include "scale_drift_slam/features/image_preparation.h"
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 namespace {
 
 TEST(ImagePreparation, AllEncodingsGiveTheSameGrey) {
@@ -72,4 +72,4 @@ TEST(ImagePreparation, PyramidHalvesEachLevel) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -4,10 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "scale_drift_slam/mapping/motion_only_bundle_adjustment.h"
-#include "scene.h"
+#include "../mapping/scene.h"
+#include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::features {
 namespace {
 
 constexpr double kFocal = 400.0;
@@ -86,4 +86,4 @@ TEST(MotionOnlyBundleAdjustment, RejectsBadInput) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::features

@@ -9,10 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "scale_drift_slam/evaluation/alignment.h"
-#include "scale_drift_slam/mapping/slam_system.h"
 #include "scale_drift_slam/sim/sequence.h"
+#include "scale_drift_slam/system/slam_system.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::system {
 namespace {
 
 struct Case {
@@ -39,14 +39,14 @@ TEST_P(EndToEnd, TracksEveryFrameWithinTheErrorBound) {
   sequence.realism.noise_sigma = 1.0;
   sequence.realism.exposure_amplitude = c.exposure;
   sim::SequenceRenderer renderer(sequence);
-  const SlamParams params;
-  SlamSystem slam(geometry::makeCameraModel(renderer.calibration()), params);
+  const system::SlamParams params;
+  system::SlamSystem slam(geometry::makeCameraModel(renderer.calibration()), params);
   std::vector<Eigen::Vector3d> estimate, truth;
   int first_tracked = -1, lost = 0;
   for (int k = 0; k < renderer.frameCount(); ++k) {
     const sim::RenderedFrame frame = renderer.render(k);
     const tracking::FrameResult r =
-        slam.processFrame(frame.timestamp, frame.image, tracking::encodingOfMat(frame.image));
+        slam.processFrame(frame.timestamp, frame.image, features::encodingOfMat(frame.image));
     lost += r.state == tracking::TrackingState::kLost;
     if (!r.has_pose) {
       EXPECT_LT(first_tracked, 0) << "frame " << k << " not tracked: " << r.message;
@@ -84,4 +84,4 @@ INSTANTIATE_TEST_SUITE_P(RenderedScenes, EndToEnd,
                                            Case{"corridor_straight", 300, "none", 0.3, 0.02}));
 
 }  // namespace
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::system

@@ -1,4 +1,4 @@
-#include "scale_drift_slam/tracking/feature_detection.h"
+#include "scale_drift_slam/features/feature_detection.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <opencv2/features2d.hpp>
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 void FeatureDetectionParams::validate() const {
   if (fast_threshold < 1 || fast_threshold > 255) {
@@ -185,4 +185,4 @@ void CornerGrid::query(const Eigen::Vector2d& center, double rx, double ry,
   }
 }
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -13,10 +13,10 @@
 
 #include <Eigen/Core>
 
+#include "scale_drift_slam/features/bundle_statistics.h"
 #include "scale_drift_slam/geometry/se3.h"
-#include "scale_drift_slam/mapping/window_bundle_adjustment.h"
 
-namespace scale_drift_slam::mapping {
+namespace scale_drift_slam::features {
 
 enum class MotionOnlySolver { kHandWritten, kCeres };
 
@@ -60,4 +60,4 @@ struct MotionOnlyResult {
 MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
                                                  const MotionOnlyBundleAdjustmentParams& params);
 
-}  // namespace scale_drift_slam::mapping
+}  // namespace scale_drift_slam::features

@@ -2,14 +2,15 @@
 // non-blocking tryPop, waitPop wakes on push and ends after close(), and items from a producer
 // thread all arrive in order.
 
+#include <cstdint>
+#include <memory>
 #include <thread>
 
 #include <gtest/gtest.h>
 
-#include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/map/message_queue.h"
+#include "scale_drift_slam/common/message_queue.h"
 
-namespace scale_drift_slam::map {
+namespace scale_drift_slam::common {
 namespace {
 
 TEST(MessageQueue, KeepsOrderAndNeverBlocksOnTryPop) {
@@ -46,22 +47,32 @@ TEST(MessageQueue, UrgentItemsOvertakeOrdinaryOnesInTheirOwnOrder) {
   EXPECT_FALSE(queue.pushUrgent(14));
 }
 
+/// A message that can only be moved, as the keyframes the queues carry.
+struct NumberedMessage {
+  std::uint64_t id = 0;
+  std::unique_ptr<int> payload;
+};
+
 TEST(MessageQueue, CarriesMessagesAcrossThreadsInOrder) {
-  MessageQueue<KeyframeMessage> queue;
+  MessageQueue<NumberedMessage> queue;
   std::thread producer([&] {
-    for (KeyframeId id = 0; id < 200; ++id) {
-      KeyframeMessage message;
-      message.keyframe.id = id;
+    for (std::uint64_t id = 0; id < 200; ++id) {
+      NumberedMessage message;
+      message.id = id;
+      message.payload = std::make_unique<int>(static_cast<int>(id));
       queue.push(std::move(message));
     }
     queue.close();
   });
-  KeyframeId expected = 0;
-  while (auto message = queue.waitPop())
-    EXPECT_EQ(message->keyframe.id, expected++);
+  std::uint64_t expected = 0;
+  while (auto message = queue.waitPop()) {
+    ASSERT_TRUE(message->payload);
+    EXPECT_EQ(*message->payload, static_cast<int>(expected));
+    EXPECT_EQ(message->id, expected++);
+  }
   producer.join();
   EXPECT_EQ(expected, 200u);
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::map
+}  // namespace scale_drift_slam::common

@@ -1,4 +1,4 @@
-#include "scale_drift_slam/tracking/active_search.h"
+#include "scale_drift_slam/features/active_search.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <Eigen/LU>
 
-namespace scale_drift_slam::tracking {
+namespace scale_drift_slam::features {
 
 void ActiveSearchParams::validate() const {
   if (template_radius < 2 || template_radius > PointAppearance::kPatchRadius / 2) {
@@ -291,4 +291,4 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
   return matches;
 }
 
-}  // namespace scale_drift_slam::tracking
+}  // namespace scale_drift_slam::features

@@ -1,0 +1,11 @@
+#include "scale_drift_slam/system/slam_params.h"
+
+namespace scale_drift_slam::system {
+
+void SlamParams::validate() const {
+  tracker.validate();
+  mapper.validate();
+  loop.validate();
+}
+
+}  // namespace scale_drift_slam::system
