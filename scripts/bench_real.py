@@ -112,13 +112,20 @@ def read_ground_truth(path):
 
 
 def first_moving_frame(ground_truth, frame_times):
-    """Index of the first frame at or after the first GT pose > 1 cm from the first GT pose."""
-    _, x0, y0, z0 = ground_truth[0]
-    for t, x, y, z in ground_truth:
-        if math.dist((x, y, z), (x0, y0, z0)) > MOVING_THRESHOLD_M:
+    """(index of the first frame at or after the first GT pose more than 1 cm from the first GT
+    pose, largest distance from that first pose), both over the frames' time span only: a GT
+    file may cover more than the images (EuRoC micro: all of V1_01)."""
+    start, end = frame_times[0] - 0.05, frame_times[-1] + 0.05
+    during = [p for p in ground_truth if start <= p[0] <= end]
+    if not during:
+        return None, None
+    first = during[0][1:]
+    largest = max(math.dist(p[1:], first) for p in during)
+    for t, *position in during:
+        if math.dist(position, first) > MOVING_THRESHOLD_M:
             later = [i for i, frame_time in enumerate(frame_times) if frame_time >= t - 1e-6]
-            return later[0] if later else None
-    return None
+            return (later[0] if later else None), largest
+    return None, largest
 
 
 def read_frames_csv(path):
@@ -221,13 +228,17 @@ def evaluate(sequence, bin_dir, out):
         sequence.notes.append(f"ground truth not usable: {error}")
         return
     if sequence.figures.get("frame_times"):
-        sequence.figures["first_moving_frame"] = first_moving_frame(
-            ground_truth, sequence.figures["frame_times"])
+        moving, largest = first_moving_frame(ground_truth, sequence.figures["frame_times"])
+        sequence.figures["first_moving_frame"] = moving
+        sequence.figures["ground_truth_motion_m"] = largest
     if not sequence.figures.get("tracked"):
         return  # nothing to evaluate; the notes already say why
     command = [str(bin_dir / "evaluate_trajectory"), str(sequence.ground_truth),
                str(out / "trajectory.txt"), "--json"]
     result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0 and "holds no poses" in result.stderr:
+        sequence.notes.append("trajectory.txt holds no poses (every map discarded): no ATE")
+        return
     if result.returncode != 0:
         sequence.notes.append(f"evaluate_trajectory failed: {last_error_line(result.stderr)}")
         return
@@ -263,14 +274,17 @@ def table_row(sequence):
     tracked = "-" if frames is None else f"{f['tracked']}/{frames} ({f['tracked_percent']:.1f} %)"
     ate = number(f.get("ate_percent_of_path"), 2, " %")
     if f.get("tracked_path_m") is not None:
-        ate += f" of {f['tracked_path_m']:.2f} m"
+        ate += f" of {f['tracked_path_m']:.2f} m ({f['evaluated_frames']} poses)"
     scales = " ".join(f"{s:.2f}" for s in f.get("scale_per_tenth", [])) or "-"
+    moving = number(f.get("first_moving_frame"), 0)
+    if f.get("first_moving_frame") is None and f.get("ground_truth_motion_m") is not None:
+        moving = f"none (GT moves {100 * f['ground_truth_motion_m']:.1f} cm)"
     drift = f.get("drift_percent_per_100m")
     drift = "-" if drift is None else f"{drift:+.1f} %"
     cpu = ("-" if f.get("tracking_cpu_median_ms") is None else
            f"{f['tracking_cpu_median_ms']:.1f} / {f['tracking_cpu_p95_ms']:.1f} ms")
     cells = [sequence.name, "-" if frames is None else str(frames),
-             number(f.get("first_tracked_frame"), 0), number(f.get("first_moving_frame"), 0),
+             number(f.get("first_tracked_frame"), 0), moving,
              tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB"),
              ("**failed**: " if sequence.failed else "") + "; ".join(sequence.notes)]
     return "| " + " | ".join(c.replace("|", "/").replace("\n", " ") for c in cells) + " |"
@@ -290,7 +304,7 @@ def header(arguments):
             break
     return [
         f"# Real camera sequences, {datetime.datetime.utcnow():%Y-%m-%dT%H:%MZ}",
-        f"Data: `{arguments.data}`; binaries: `{arguments.bin_dir}`; checkout "
+        f"Data: `{arguments.data}`; binaries: `{arguments.bin_dir}`; scripts at "
         f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, {platform.machine()}), "
         f"load average {os.getloadavg()[0]:.1f} at the start.",
         "",
