@@ -305,7 +305,8 @@ def header(arguments):
     return [
         f"# Real camera sequences, {datetime.datetime.utcnow():%Y-%m-%dT%H:%MZ}",
         f"Data: `{arguments.data}`; binaries: `{arguments.bin_dir}`; scripts at "
-        f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, {platform.machine()}), "
+        f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, "
+        f"{platform.machine()}), "
         f"load average {os.getloadavg()[0]:.1f} at the start.",
         "",
     ]
