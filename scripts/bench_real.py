@@ -1,0 +1,358 @@
+#!/usr/bin/python3
+"""Runs run_sequence and evaluate_trajectory on every real camera sequence under a data folder
+laid out as ../shared/data/real (doc/benchmarks.md, "Real camera sequences") and writes one
+Markdown table and a JSON file with the same figures. Called by `scripts/bench real`; standard
+library only. A sequence that fails gets its reason in its row; the others still run."""
+
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import platform
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+MOVING_THRESHOLD_M = 0.01  # the camera "starts moving" when GT is this far from its first pose
+MIN_PATH_FOR_DRIFT_M = 10.0  # shorter tracked paths get no drift per 100 m (too much extrapolation)
+TRACKING_STATES = ("good", "weak")
+GROUND_TRUTH_NAMES = ("groundtruth_tum.txt", "groundtruth.txt")
+
+
+class Sequence:
+    """One sequence found under the data folder and what the benchmark measured on it."""
+
+    def __init__(self, name, folder):
+        self.name = name
+        self.folder = folder
+        self.layout = None  # TUM, EuRoC or KITTI
+        self.dataset = None  # what run_sequence gets as DATASET
+        self.calibration = None  # calib.yaml, or None: the dataset's own
+        self.ground_truth = None
+        self.figures = {}
+        self.notes = []
+        self.failed = False
+
+
+# --- finding the sequences -------------------------------------------------------------------
+
+
+def is_kitti(folder):
+    return (folder / "times.txt").is_file() and (folder / "image_0").is_dir()
+
+
+def find_sequences(data_dir):
+    """Every sub-folder of data_dir is a sequence (KITTI: one per sequences/NN inside it)."""
+    sequences = []
+    for folder in sorted(p for p in data_dir.iterdir() if p.is_dir()):
+        kitti_folders = sorted(p for p in (folder / "sequences").glob("*") if is_kitti(p))
+        if is_kitti(folder):
+            kitti_folders.insert(0, folder)
+        if kitti_folders:
+            for dataset in kitti_folders:
+                name = folder.name if len(kitti_folders) == 1 else f"{folder.name}/{dataset.name}"
+                sequences.append(describe(Sequence(name, folder), "KITTI", dataset))
+        elif (folder / "rgb.txt").is_file():
+            sequences.append(describe(Sequence(folder.name, folder), "TUM", folder))
+        elif (folder / "mav0" / "cam0" / "data.csv").is_file():
+            sequences.append(describe(Sequence(folder.name, folder), "EuRoC", folder))
+        else:
+            sequence = Sequence(folder.name, folder)
+            fail(sequence, "no TUM (rgb.txt), EuRoC (mav0/cam0/data.csv) or KITTI "
+                           "(image_0/, times.txt) layout found")
+            sequences.append(sequence)
+    return sequences
+
+
+def describe(sequence, layout, dataset):
+    sequence.layout = layout
+    sequence.dataset = dataset
+    if (sequence.folder / "calib.yaml").is_file():
+        sequence.calibration = sequence.folder / "calib.yaml"
+    for name in GROUND_TRUTH_NAMES:
+        if (sequence.folder / name).is_file():
+            sequence.ground_truth = sequence.folder / name
+            break
+    return sequence
+
+
+def fail(sequence, reason):
+    sequence.failed = True
+    sequence.notes.append(reason)
+
+
+# --- reading the tools' outputs --------------------------------------------------------------
+
+
+def read_ground_truth(path):
+    """(time, x, y, z) of a TUM file ('t tx ty tz qx qy qz qw') or an EuRoC csv (t in ns).
+    Raises ValueError for anything else: evaluate_trajectory reads only these two."""
+    positions = []
+    with open(path) as file:
+        for number, line in enumerate(file, 1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            euroc = "," in line
+            fields = line.replace(",", " ").split()
+            if len(fields) < 8:
+                raise ValueError(f"{path.name} line {number}: {len(fields)} fields, not TUM "
+                                 "(t tx ty tz qx qy qz qw) nor EuRoC csv")
+            values = [float(v) for v in fields[:4]]
+            if euroc:
+                values[0] *= 1e-9
+            positions.append(tuple(values))
+    if not positions:
+        raise ValueError(f"{path.name} holds no poses")
+    return sorted(positions)
+
+
+def first_moving_frame(ground_truth, frame_times):
+    """(index of the first frame at or after the first GT pose more than 1 cm from the first GT
+    pose, largest distance from that first pose), both over the frames' time span only: a GT
+    file may cover more than the images (EuRoC micro: all of V1_01)."""
+    start, end = frame_times[0] - 0.05, frame_times[-1] + 0.05
+    during = [p for p in ground_truth if start <= p[0] <= end]
+    if not during:
+        return None, None
+    first = during[0][1:]
+    largest = max(math.dist(p[1:], first) for p in during)
+    for t, *position in during:
+        if math.dist(position, first) > MOVING_THRESHOLD_M:
+            later = [i for i, frame_time in enumerate(frame_times) if frame_time >= t - 1e-6]
+            return (later[0] if later else None), largest
+    return None, largest
+
+
+def read_frames_csv(path):
+    with open(path, newline="") as file:
+        return list(csv.DictReader(file))
+
+
+def peak_memory_mib(time_log):
+    match = re.search(r"Maximum resident set size \(kbytes\): (\d+)", time_log)
+    return int(match.group(1)) / 1024.0 if match else None
+
+
+def drift_per_100m(segments):
+    """Scale drift per 100 m from the scale per tenth: the least-squares slope of log(scale)
+    against each segment's mid distance, as the percentage the scale changes over 100 m."""
+    points = [(0.5 * (s["start_distance"] + s["end_distance"]), math.log(s["scale"]))
+              for s in segments if s["scale"] > 0]
+    if len(points) < 3:
+        return None
+    mean_d = sum(d for d, _ in points) / len(points)
+    mean_s = sum(s for _, s in points) / len(points)
+    spread = sum((d - mean_d) ** 2 for d, _ in points)
+    if spread <= 0:
+        return None
+    slope = sum((d - mean_d) * (s - mean_s) for d, s in points) / spread
+    return 100.0 * (math.exp(100.0 * slope) - 1.0)
+
+
+def last_error_line(text):
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    errors = [line for line in lines if "error" in line.lower()]
+    return (errors or lines or ["no output"])[-1]
+
+
+# --- running one sequence ---------------------------------------------------------------------
+
+
+def run_sequence(sequence, bin_dir, out_dir, timeout):
+    out = out_dir / sequence.name.replace("/", "_")
+    out.mkdir(parents=True, exist_ok=True)
+    command = ["/usr/bin/time", "-v", "-o", str(out / "time.txt"), str(bin_dir / "run_sequence"),
+               str(sequence.dataset), "--out", str(out), "--quiet"]
+    if sequence.calibration:
+        command += ["--calib", str(sequence.calibration)]
+    for stale in ("summary.json", "frames.csv", "trajectory.txt", "evaluation.json"):
+        (out / stale).unlink(missing_ok=True)
+    started = time.monotonic()
+    with open(out / "run.log", "w") as log:
+        log.write(" ".join(command) + "\n")
+        log.flush()
+        try:
+            status = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT,
+                                    timeout=timeout).returncode
+        except subprocess.TimeoutExpired:
+            fail(sequence, f"run_sequence timed out after {timeout:.0f} s")
+            return out
+    sequence.figures["run_seconds"] = round(time.monotonic() - started, 1)
+    time_log = (out / "time.txt").read_text() if (out / "time.txt").exists() else ""
+    sequence.figures["peak_memory_mib"] = peak_memory_mib(time_log)
+    if status != 0 or not (out / "summary.json").exists():
+        fail(sequence, f"run_sequence failed (exit {status}): "
+                       f"{last_error_line((out / 'run.log').read_text())}")
+        return out
+    summary = json.loads((out / "summary.json").read_text())
+    frames = read_frames_csv(out / "frames.csv")
+    figures = sequence.figures
+    figures["frames"] = summary["frames"]
+    figures["tracked"] = summary["tracked"]
+    figures["tracked_percent"] = 100.0 * summary["tracked"] / max(1, summary["frames"])
+    tracked_indices = [int(f["frame"]) for f in frames if f["state"] in TRACKING_STATES]
+    figures["first_tracked_frame"] = tracked_indices[0] if tracked_indices else None
+    figures["frame_times"] = [float(f["timestamp"]) for f in frames]
+    cpu = summary.get("timing", {}).get("tracking_cpu")
+    if cpu:
+        figures["tracking_cpu_median_ms"] = cpu["median_ms"]
+        figures["tracking_cpu_p95_ms"] = cpu["p95_ms"]
+    figures["keyframes"] = summary.get("keyframes")
+    figures["map_restarts"] = summary.get("map_restarts", 0)
+    figures["relocalisations"] = summary.get("relocalisations", 0)
+    figures["rejected_frames"] = summary.get("rejected_frames", 0)
+    if figures["rejected_frames"]:
+        sequence.notes.append(f"{figures['rejected_frames']} frames rejected")
+    if figures["map_restarts"]:
+        sequence.notes.append(f"{figures['map_restarts']} young map(s) discarded")
+    if figures["relocalisations"]:
+        sequence.notes.append(f"{figures['relocalisations']} relocalisation(s)")
+    if not tracked_indices and frames:
+        sequence.notes.append(f"never initialised; last message: '{frames[-1]['message']}'")
+    return out
+
+
+def evaluate(sequence, bin_dir, out):
+    if not sequence.ground_truth:
+        sequence.figures["ground_truth"] = None
+        return
+    sequence.figures["ground_truth"] = str(sequence.ground_truth)
+    try:
+        ground_truth = read_ground_truth(sequence.ground_truth)
+    except ValueError as error:
+        sequence.notes.append(f"ground truth not usable: {error}")
+        return
+    if sequence.figures.get("frame_times"):
+        moving, largest = first_moving_frame(ground_truth, sequence.figures["frame_times"])
+        sequence.figures["first_moving_frame"] = moving
+        sequence.figures["ground_truth_motion_m"] = largest
+    if not sequence.figures.get("tracked"):
+        return  # nothing to evaluate; the notes already say why
+    command = [str(bin_dir / "evaluate_trajectory"), str(sequence.ground_truth),
+               str(out / "trajectory.txt"), "--json"]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0 and "holds no poses" in result.stderr:
+        sequence.notes.append("trajectory.txt holds no poses (every map discarded): no ATE")
+        return
+    if result.returncode != 0:
+        sequence.notes.append(f"evaluate_trajectory failed: {last_error_line(result.stderr)}")
+        return
+    (out / "evaluation.json").write_text(result.stdout)
+    evaluation = json.loads(result.stdout)
+    figures = sequence.figures
+    path_length = evaluation["ground_truth_path_length"]
+    figures["evaluated_frames"] = evaluation["frames"]["tracked"]
+    figures["tracked_path_m"] = path_length
+    figures["ate_rmse_m"] = evaluation["ate"]["rmse"]
+    figures["ate_percent_of_path"] = (100.0 * evaluation["ate"]["rmse"] / path_length
+                                      if path_length > 0 else None)
+    segments = evaluation.get("scale_segments", [])
+    figures["scale_per_tenth"] = [s["scale"] for s in segments]
+    figures["scale_last_over_first"] = evaluation.get("scale_drift")
+    figures["drift_percent_per_100m"] = (drift_per_100m(segments)
+                                         if path_length >= MIN_PATH_FOR_DRIFT_M else None)
+
+
+# --- the table ---------------------------------------------------------------------------------
+
+COLUMNS = ["sequence", "frames", "first tracked", "moving from (GT)", "tracked", "ATE % of path",
+           "scale per tenth", "drift / 100 m", "CPU median / p95", "peak memory", "notes"]
+
+
+def number(value, digits=1, unit=""):
+    return "-" if value is None else f"{value:.{digits}f}{unit}"
+
+
+def table_row(sequence):
+    f = sequence.figures
+    frames = f.get("frames")
+    tracked = "-" if frames is None else f"{f['tracked']}/{frames} ({f['tracked_percent']:.1f} %)"
+    ate = number(f.get("ate_percent_of_path"), 2, " %")
+    if f.get("tracked_path_m") is not None:
+        ate += f" of {f['tracked_path_m']:.2f} m ({f['evaluated_frames']} poses)"
+    scales = " ".join(f"{s:.2f}" for s in f.get("scale_per_tenth", [])) or "-"
+    moving = number(f.get("first_moving_frame"), 0)
+    if f.get("first_moving_frame") is None and f.get("ground_truth_motion_m") is not None:
+        moving = f"none (GT moves {100 * f['ground_truth_motion_m']:.1f} cm)"
+    drift = f.get("drift_percent_per_100m")
+    drift = "-" if drift is None else f"{drift:+.1f} %"
+    cpu = ("-" if f.get("tracking_cpu_median_ms") is None else
+           f"{f['tracking_cpu_median_ms']:.1f} / {f['tracking_cpu_p95_ms']:.1f} ms")
+    cells = [sequence.name, "-" if frames is None else str(frames),
+             number(f.get("first_tracked_frame"), 0), moving,
+             tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB"),
+             ("**failed**: " if sequence.failed else "") + "; ".join(sequence.notes)]
+    return "| " + " | ".join(c.replace("|", "/").replace("\n", " ") for c in cells) + " |"
+
+
+def git_commit(root):
+    result = subprocess.run(["git", "-C", str(root), "describe", "--always", "--dirty"],
+                            capture_output=True, text=True)
+    return result.stdout.strip() or "unknown"
+
+
+def header(arguments):
+    cpu_model = "unknown"
+    for line in Path("/proc/cpuinfo").read_text().splitlines():
+        if line.startswith("model name"):
+            cpu_model = line.split(":", 1)[1].strip()
+            break
+    return [
+        f"# Real camera sequences, {datetime.datetime.utcnow():%Y-%m-%dT%H:%MZ}",
+        f"Data: `{arguments.data}`; binaries: `{arguments.bin_dir}`; scripts at "
+        f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, "
+        f"{platform.machine()}), "
+        f"load average {os.getloadavg()[0]:.1f} at the start.",
+        "",
+    ]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--data", type=Path, required=True, help="folder of sequence folders")
+    parser.add_argument("--out", type=Path, required=True, help="Markdown table (JSON beside it)")
+    parser.add_argument("--bin-dir", type=Path, required=True,
+                        help="folder with run_sequence and evaluate_trajectory")
+    parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parent.parent)
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds per sequence")
+    arguments = parser.parse_args()
+    if not arguments.data.is_dir():
+        sys.exit(f"bench_real.py: no data folder '{arguments.data}'")
+    arguments.out.parent.mkdir(parents=True, exist_ok=True)
+    runs_dir = arguments.out.with_suffix("")  # real.md -> real/<sequence>/
+    lines = header(arguments)
+    sequences = find_sequences(arguments.data)
+    for sequence in sequences:
+        if sequence.failed:
+            continue
+        print(f"[bench real] {sequence.name} ({sequence.layout})", flush=True)
+        out = run_sequence(sequence, arguments.bin_dir, runs_dir, arguments.timeout)
+        if not sequence.failed:
+            evaluate(sequence, arguments.bin_dir, out)
+        print("  " + table_row(sequence), flush=True)
+    lines.append("| " + " | ".join(COLUMNS) + " |")
+    lines.append("|" + "---|" * len(COLUMNS))
+    lines += [table_row(s) for s in sequences]
+    lines.append("")
+    lines.append(f"Per-sequence outputs (run.log, time.txt, frames.csv, summary.json, "
+                 f"evaluation.json) in `{runs_dir}/`.")
+    arguments.out.write_text("\n".join(lines) + "\n")
+    results = []
+    for s in sequences:
+        figures = {k: v for k, v in s.figures.items() if k != "frame_times"}
+        results.append({"sequence": s.name, "layout": s.layout,
+                        "dataset": str(s.dataset) if s.dataset else None,
+                        "calibration": str(s.calibration) if s.calibration else "dataset's own",
+                        "failed": s.failed, "notes": s.notes, **figures})
+    arguments.out.with_suffix(".json").write_text(json.dumps(
+        {"header": lines[:2], "sequences": results}, indent=2) + "\n")
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
