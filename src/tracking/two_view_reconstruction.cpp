@@ -349,14 +349,16 @@ TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences
   result.gric_essential = gricEssential(E_e, a, b, inv_sigma_sq);
   result.used_homography = result.gric_homography < result.gric_essential;
 
-  // The chosen model's inliers set the bar for "enough points"; the hypotheses are triangulated
-  // over both models' inliers, so that the points off a homography's plane count too.
+  // The chosen model's inliers set the bar for "enough points". A homography's motions are
+  // triangulated over the essential matrix's inliers too: the points off its plane are its
+  // outliers, and only they tell its two motions apart.
   const cv::Mat& mask = result.used_homography ? fit.mask_h : fit.mask_e;
   std::vector<bool> candidates(n);
   int num_inliers = 0;
   for (int i = 0; i < n; ++i) {
     num_inliers += mask.at<unsigned char>(i) != 0;
-    candidates[i] = fit.mask_h.at<unsigned char>(i) != 0 || fit.mask_e.at<unsigned char>(i) != 0;
+    candidates[i] = mask.at<unsigned char>(i) != 0 ||
+                    (result.used_homography && fit.mask_e.at<unsigned char>(i) != 0);
   }
   const std::vector<geometry::SE3> motions =
       result.used_homography ? motionsFromHomography(fit.H) : motionsFromEssential(fit.E);
