@@ -4,9 +4,11 @@
 // matrix to the correspondences (OpenCV RANSAC), select one by Torr's GRIC (which weighs the fit
 // against the model's complexity; ORB-SLAM's score ratio favours the 5-point essential matrix even
 // on planes), decompose the chosen model into its motion hypotheses, triangulate under each and
-// keep the one whose points pass cheirality, reprojection and parallax checks, clearly better
-// than the runner-up. Two-view bundle adjustment follows, then the scale is normalised so that
-// the median depth in the first view is 1. Pure rotation has no parallax and is refused.
+// keep the one whose points pass cheirality, reprojection and parallax checks. When others come
+// close (a homography's two-fold ambiguity), each is refined by two-view BA and the one with
+// clearly lower reprojection errors on the points off the plane wins (doc/frontend.md).
+// Two-view bundle adjustment follows, then the scale is normalised so that the median depth in
+// the first view is 1. Pure rotation has no parallax and is refused.
 
 #include <string>
 #include <vector>
