@@ -62,6 +62,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"initializer", "min_points", &t.initializer.two_view.min_points},
       {"initializer", "min_good_fraction", &t.initializer.two_view.min_good_fraction},
       {"initializer", "ambiguity_ratio", &t.initializer.two_view.ambiguity_ratio},
+      {"initializer", "ambiguity_sigmas", &t.initializer.two_view.ambiguity_sigmas},
       {"initializer", "bundle_adjustment_iterations",
        &t.initializer.two_view.bundle_adjustment_iterations},
       {"flow", "window", &t.motion_prior.flow.window},

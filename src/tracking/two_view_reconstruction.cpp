@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <numeric>
 #include <stdexcept>
 
 #include <opencv2/calib3d.hpp>
@@ -29,6 +31,9 @@ void TwoViewParams::validate() const {
   }
   if (!(ambiguity_ratio > 0.0 && ambiguity_ratio <= 1.0)) {
     throw std::invalid_argument("initializer.ambiguity_ratio must be in (0, 1]");
+  }
+  if (!(ambiguity_sigmas >= 0.0)) {
+    throw std::invalid_argument("initializer.ambiguity_sigmas must be >= 0");
   }
   if (bundle_adjustment_iterations < 0) {
     throw std::invalid_argument("initializer.bundle_adjustment_iterations must be >= 0");
@@ -110,6 +115,9 @@ struct Hypothesis {
   geometry::SE3 T_second_first;
   std::vector<Eigen::Vector3d> points;
   std::vector<bool> good;
+  /// Per inlier: squared reprojection error (pixels^2, both images), capped at twice
+  /// max_reprojection_px^2; the cap also where the point is behind a camera.
+  std::vector<double> error_sq;
   int num_good = 0;
   double median_parallax_deg = 0.0;
 };
@@ -123,6 +131,7 @@ Hypothesis evaluate(const geometry::SE3& T, const Correspondences& a, const Corr
   h.points.assign(a.size(), Eigen::Vector3d::Zero());
   h.good.assign(a.size(), false);
   const double max_err_sq = std::pow(params.max_reprojection_px / focal, 2);
+  h.error_sq.assign(a.size(), 2.0 * params.max_reprojection_px * params.max_reprojection_px);
   std::vector<double> parallaxes;
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (!inlier[i]) continue;
@@ -130,8 +139,10 @@ Hypothesis evaluate(const geometry::SE3& T, const Correspondences& a, const Corr
     if (!p.allFinite() || p.z() <= 0.0) continue;
     const Eigen::Vector3d q = T * p;
     if (q.z() <= 0.0) continue;
-    if ((p.hnormalized() - a[i]).squaredNorm() > max_err_sq) continue;
-    if ((q.hnormalized() - b[i]).squaredNorm() > max_err_sq) continue;
+    const double err_a = (p.hnormalized() - a[i]).squaredNorm();
+    const double err_b = (q.hnormalized() - b[i]).squaredNorm();
+    h.error_sq[i] = std::min(h.error_sq[i], (err_a + err_b) * focal * focal);
+    if (err_a > max_err_sq || err_b > max_err_sq) continue;
     const double parallax = parallaxDeg(p, T);
     if (parallax < params.min_point_parallax_deg) continue;
     h.points[i] = p;
@@ -176,73 +187,119 @@ TwoViewResult refuse(TwoViewResult result, const std::string& reason) {
   return result;
 }
 
-}  // namespace
-
-TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences& b, double focal,
-                                 const TwoViewParams& params) {
-  TwoViewResult result;
-  const int n = static_cast<int>(a.size());
-  if (n != static_cast<int>(b.size())) return refuse(result, "correspondence lists differ in size");
-  if (n < params.min_points) {
-    return refuse(result, "only " + std::to_string(n) + " correspondences");
+// Why a hypothesis is too weak to start a map (too few points, too little parallax), or "".
+std::string weakness(const Hypothesis& h, int num_inliers, const TwoViewParams& params) {
+  if (h.num_good < params.min_points || h.num_good < params.min_good_fraction * num_inliers) {
+    return "only " + std::to_string(h.num_good) + " of " + std::to_string(num_inliers) +
+           " inliers triangulate with parallax (too little baseline?)";
   }
+  if (h.median_parallax_deg < params.min_median_parallax_deg) {
+    return "median parallax " + std::to_string(h.median_parallax_deg) + " deg is too small";
+  }
+  return "";
+}
+
+struct ModelFit {
+  cv::Mat H, E, mask_h, mask_e;
+};
+
+// RANSAC fits of both models; returns why they failed, or "".
+std::string fitModels(const Correspondences& a, const Correspondences& b, double focal,
+                      const TwoViewParams& params, ModelFit* fit) {
   const std::vector<cv::Point2d> pa = toCv(a), pb = toCv(b);
   const double threshold = params.ransac_threshold_px / focal;
-  cv::Mat H, E, mask_h, mask_e;
   try {
-    H = cv::findHomography(pa, pb, cv::RANSAC, threshold, mask_h, 2000, 0.999);
-    E = cv::findEssentialMat(pa, pb, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, 0.999, threshold,
-                             mask_e);
+    fit->H = cv::findHomography(pa, pb, cv::RANSAC, threshold, fit->mask_h, 2000, 0.999);
+    fit->E = cv::findEssentialMat(pa, pb, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, 0.999, threshold,
+                                  fit->mask_e);
   } catch (const cv::Exception& e) {
-    return refuse(result, std::string("model fitting failed: ") + e.what());
+    return std::string("model fitting failed: ") + e.what();
   }
-  if (H.empty() || E.empty() || E.rows < 3) return refuse(result, "no model fits");
-  if (E.rows > 3) E = E.rowRange(0, 3).clone();
-  Eigen::Matrix3d H_e, E_e;
-  cv::cv2eigen(H, H_e);
-  cv::cv2eigen(E, E_e);
-  const double inv_sigma_sq = focal * focal / (params.sigma_px * params.sigma_px);
-  result.gric_homography = gricHomography(H_e, a, b, inv_sigma_sq);
-  result.gric_essential = gricEssential(E_e, a, b, inv_sigma_sq);
-  result.used_homography = result.gric_homography < result.gric_essential;
+  if (fit->H.empty() || fit->E.empty() || fit->E.rows < 3) return "no model fits";
+  if (fit->E.rows > 3) fit->E = fit->E.rowRange(0, 3).clone();
+  return "";
+}
 
-  const cv::Mat& mask = result.used_homography ? mask_h : mask_e;
-  std::vector<bool> inlier(n);
-  int num_inliers = 0;
-  for (int i = 0; i < n; ++i)
-    num_inliers += (inlier[i] = mask.at<unsigned char>(i) != 0);
-  const std::vector<geometry::SE3> motions =
-      result.used_homography ? motionsFromHomography(H) : motionsFromEssential(E);
+// Two-view BA of one hypothesis over its good points, then triangulated again: a homography's
+// motion is fitted to the plane alone, and only the refined motion explains the points off it.
+Hypothesis refine(const Hypothesis& h, const Correspondences& a, const Correspondences& b,
+                  const std::vector<bool>& candidates, double focal, const TwoViewParams& params) {
+  geometry::SE3 T = h.T_second_first;
+  std::vector<Eigen::Vector3d> points = h.points;
+  bundleAdjustTwoView(a, b, h.good, focal, params.max_reprojection_px,
+                      params.bundle_adjustment_iterations, &T, &points);
+  return evaluate(T, a, b, candidates, focal, params);
+}
 
-  std::vector<Hypothesis> hypotheses;
-  hypotheses.reserve(motions.size());
-  for (const geometry::SE3& T : motions)
-    hypotheses.push_back(evaluate(T, a, b, inlier, focal, params));
-  std::sort(hypotheses.begin(), hypotheses.end(),
-            [](const Hypothesis& x, const Hypothesis& y) { return x.num_good > y.num_good; });
-  const Hypothesis& best = hypotheses.front();
-  const int second = hypotheses.size() > 1 ? hypotheses[1].num_good : 0;
-  result.median_parallax_deg = best.median_parallax_deg;
-  const std::string model = result.used_homography ? "homography" : "essential matrix";
-  if (best.num_good < params.min_points || best.num_good < params.min_good_fraction * num_inliers) {
-    return refuse(result, model + ": only " + std::to_string(best.num_good) + " of " +
-                              std::to_string(num_inliers) +
-                              " inliers triangulate with parallax (too little baseline?)");
+// Paired test of the per-point reprojection errors: with d_i = e_y,i^2 - e_x,i^2, x is clearly
+// better when sum d >= sigmas * sqrt(sum d^2). Where the scene cannot tell the motions apart (a
+// single plane) both fit every point and the d_i are noise of either sign; points off the plane
+// fit only the true motion and push the sum one way. The statistic is free of the noise level.
+bool clearlyBetter(const Hypothesis& x, const Hypothesis& y, double sigmas, double* z) {
+  double sum = 0.0, sum_sq = 0.0;
+  for (std::size_t i = 0; i < x.error_sq.size(); ++i) {
+    const double d = y.error_sq[i] - x.error_sq[i];
+    sum += d;
+    sum_sq += d * d;
   }
-  if (best.median_parallax_deg < params.min_median_parallax_deg) {
-    return refuse(result, model + ": median parallax " + std::to_string(best.median_parallax_deg) +
-                              " deg is too small");
-  }
-  if (second >= params.ambiguity_ratio * best.num_good) {
-    return refuse(result, model + ": ambiguous motion (" + std::to_string(best.num_good) + " vs " +
-                              std::to_string(second) + " good points)");
-  }
+  *z = sum_sq > 0.0 ? sum / std::sqrt(sum_sq) : 0.0;
+  return *z >= sigmas;
+}
 
+// Two refined motions are one when they differ by no more than BA's convergence: the mirror
+// solution of a homography is tens of degrees away in its translation direction.
+bool sameMotion(const geometry::SE3& x, const geometry::SE3& y) {
+  const double rotation_deg = x.rotation().angularDistance(y.rotation()) * 180.0 / M_PI;
+  const double cos_direction = x.translation().normalized().dot(y.translation().normalized());
+  return rotation_deg < 0.1 && cos_direction > std::cos(1.0 * M_PI / 180.0);
+}
+
+struct Decision {
+  bool resolved = false;
+  Hypothesis winner;
+  std::string detail;  ///< How many points told the two leaders apart.
+};
+
+// The homography's two-fold ambiguity does not fade with more motion on a mostly planar scene:
+// instead of waiting, every contender (>= ambiguity_ratio of the best) is refined on all
+// candidate points and the one the off-model points agree with wins, if it wins clearly.
+Decision resolveAmbiguity(const std::vector<Hypothesis>& sorted, const Correspondences& a,
+                          const Correspondences& b, const std::vector<bool>& candidates,
+                          double focal, const TwoViewParams& params) {
+  std::vector<Hypothesis> contenders;
+  for (const Hypothesis& h : sorted) {
+    if (h.num_good < params.ambiguity_ratio * sorted.front().num_good) break;
+    contenders.push_back(refine(h, a, b, candidates, focal, params));
+  }
+  const auto total = [](const Hypothesis& h) {
+    return std::accumulate(h.error_sq.begin(), h.error_sq.end(), 0.0);
+  };
+  std::sort(contenders.begin(), contenders.end(),
+            [&](const Hypothesis& x, const Hypothesis& y) { return total(x) < total(y); });
+  Decision decision;
+  decision.winner = contenders.front();
+  for (std::size_t k = 1; k < contenders.size(); ++k) {
+    if (sameMotion(decision.winner.T_second_first, contenders[k].T_second_first)) continue;
+    double z = 0.0;
+    const bool clear = clearlyBetter(decision.winner, contenders[k], params.ambiguity_sigmas, &z);
+    char detail[64];
+    std::snprintf(detail, sizeof(detail), "reprojection errors differ by %.1f sigma", z);
+    decision.detail = detail;
+    if (!clear) return decision;
+  }
+  decision.resolved = true;
+  return decision;
+}
+
+// Two-view BA of the chosen hypothesis, a re-check of its points, and the scale fixed so that
+// the median depth in the first view is 1.
+TwoViewResult finish(TwoViewResult result, const Hypothesis& best, const Correspondences& a,
+                     const Correspondences& b, double focal, const TwoViewParams& params) {
+  const int n = static_cast<int>(a.size());
   geometry::SE3 T = best.T_second_first;
   std::vector<Eigen::Vector3d> points = best.points;
   bundleAdjustTwoView(a, b, best.good, focal, params.max_reprojection_px,
                       params.bundle_adjustment_iterations, &T, &points);
-  // Re-check the adjusted points, then fix the scale: median depth in the first view = 1.
   const double max_err_sq = std::pow(params.max_reprojection_px / focal, 2);
   std::vector<bool> good(n, false);
   std::vector<double> depths;
@@ -269,6 +326,68 @@ TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences
   }
   result.success = true;
   return result;
+}
+
+}  // namespace
+
+TwoViewResult reconstructTwoView(const Correspondences& a, const Correspondences& b, double focal,
+                                 const TwoViewParams& params) {
+  TwoViewResult result;
+  const int n = static_cast<int>(a.size());
+  if (n != static_cast<int>(b.size())) return refuse(result, "correspondence lists differ in size");
+  if (n < params.min_points) {
+    return refuse(result, "only " + std::to_string(n) + " correspondences");
+  }
+  ModelFit fit;
+  const std::string failure = fitModels(a, b, focal, params, &fit);
+  if (!failure.empty()) return refuse(result, failure);
+  Eigen::Matrix3d H_e, E_e;
+  cv::cv2eigen(fit.H, H_e);
+  cv::cv2eigen(fit.E, E_e);
+  const double inv_sigma_sq = focal * focal / (params.sigma_px * params.sigma_px);
+  result.gric_homography = gricHomography(H_e, a, b, inv_sigma_sq);
+  result.gric_essential = gricEssential(E_e, a, b, inv_sigma_sq);
+  result.used_homography = result.gric_homography < result.gric_essential;
+
+  // The chosen model's inliers set the bar for "enough points". A homography's motions are
+  // triangulated over the essential matrix's inliers too: the points off its plane are its
+  // outliers, and only they tell its two motions apart.
+  const cv::Mat& mask = result.used_homography ? fit.mask_h : fit.mask_e;
+  std::vector<bool> candidates(n);
+  int num_inliers = 0;
+  for (int i = 0; i < n; ++i) {
+    num_inliers += mask.at<unsigned char>(i) != 0;
+    candidates[i] = mask.at<unsigned char>(i) != 0 ||
+                    (result.used_homography && fit.mask_e.at<unsigned char>(i) != 0);
+  }
+  const std::vector<geometry::SE3> motions =
+      result.used_homography ? motionsFromHomography(fit.H) : motionsFromEssential(fit.E);
+  std::vector<Hypothesis> hypotheses;
+  hypotheses.reserve(motions.size());
+  for (const geometry::SE3& T : motions)
+    hypotheses.push_back(evaluate(T, a, b, candidates, focal, params));
+  std::sort(hypotheses.begin(), hypotheses.end(),
+            [](const Hypothesis& x, const Hypothesis& y) { return x.num_good > y.num_good; });
+  Hypothesis best = hypotheses.front();
+  const int second = hypotheses.size() > 1 ? hypotheses[1].num_good : 0;
+  result.median_parallax_deg = best.median_parallax_deg;
+  const std::string model = result.used_homography ? "homography" : "essential matrix";
+  std::string weak = weakness(best, num_inliers, params);
+  if (!weak.empty()) return refuse(result, model + ": " + weak);
+  if (second >= params.ambiguity_ratio * best.num_good) {
+    const Decision decision = resolveAmbiguity(hypotheses, a, b, candidates, focal, params);
+    if (!decision.resolved) {
+      return refuse(result, model + ": ambiguous motion (" + std::to_string(best.num_good) +
+                                " vs " + std::to_string(second) + " good points; " +
+                                decision.detail + ")");
+    }
+    best = decision.winner;
+    result.ambiguity_resolved = true;
+    result.median_parallax_deg = best.median_parallax_deg;
+    weak = weakness(best, num_inliers, params);
+    if (!weak.empty()) return refuse(result, model + " (ambiguity resolved): " + weak);
+  }
+  return finish(result, best, a, b, focal, params);
 }
 
 }  // namespace scale_drift_slam::tracking

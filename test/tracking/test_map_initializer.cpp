@@ -1,6 +1,7 @@
 // Map initialisation on rendered image sequences with a known answer: a planar scene (one
-// textured wall) and a two-plane scene both initialise with the right motion and median depth 1;
-// a purely rotating camera never initialises; a black frame or a blank one does no harm.
+// textured wall) and a two-plane scene (either model) both initialise with the right motion and
+// median depth 1; a purely rotating camera never initialises; a black frame or a blank one does
+// no harm.
 
 #include <functional>
 
@@ -90,7 +91,9 @@ TEST(MapInitializer, InitialisesOnATwoPlaneScene) {
   const auto pose = [](int k) { return sideways(k, 0.02, -0.002); };
   const InitRun run = runSequence(planes, pose, 40);
   ASSERT_TRUE(run.map.has_value());
-  EXPECT_FALSE(run.map->used_homography);
+  // The big far wall can make the homography the better model; the near plane then tells its two
+  // motions apart (frame 15; waiting for the essential matrix took until frame 17).
+  EXPECT_LE(run.frame, 17);
   expectMotion(run, pose(0), pose(run.frame));
 }
 

@@ -4,9 +4,11 @@
 // matrix to the correspondences (OpenCV RANSAC), select one by Torr's GRIC (which weighs the fit
 // against the model's complexity; ORB-SLAM's score ratio favours the 5-point essential matrix even
 // on planes), decompose the chosen model into its motion hypotheses, triangulate under each and
-// keep the one whose points pass cheirality, reprojection and parallax checks, clearly better
-// than the runner-up. Two-view bundle adjustment follows, then the scale is normalised so that
-// the median depth in the first view is 1. Pure rotation has no parallax and is refused.
+// keep the one whose points pass cheirality, reprojection and parallax checks. When others come
+// close (a homography's two-fold ambiguity), each is refined by two-view BA and the one with
+// clearly lower reprojection errors on the points off the plane wins (doc/frontend.md).
+// Two-view bundle adjustment follows, then the scale is normalised so that the median depth in
+// the first view is 1. Pure rotation has no parallax and is refused.
 
 #include <string>
 #include <vector>
@@ -25,7 +27,10 @@ struct TwoViewParams {
   double min_median_parallax_deg = 1.0;  ///< Refuse when the median parallax is below this.
   int min_points = 50;                   ///< Refuse with fewer good points.
   double min_good_fraction = 0.5;        ///< ...or with fewer than this fraction of the inliers.
-  double ambiguity_ratio = 0.7;          ///< Refuse when the runner-up keeps >= this * best.
+  double ambiguity_ratio = 0.7;          ///< Contenders: motions keeping >= this * best's points.
+  /// Among contenders, the winner must explain this many standard deviations (of a fair split)
+  /// more of the points that tell them apart than each other contender does; else refuse.
+  double ambiguity_sigmas = 3.0;
   int bundle_adjustment_iterations = 20;
   void validate() const;
 };
@@ -34,7 +39,8 @@ struct TwoViewResult {
   bool success = false;
   std::string reason;  ///< Why it was refused ("" on success).
   bool used_homography = false;
-  double gric_homography = 0.0;  ///< GRIC of both models (lower is better).
+  bool ambiguity_resolved = false;  ///< Contending motions were told apart (resolveAmbiguity).
+  double gric_homography = 0.0;     ///< GRIC of both models (lower is better).
   double gric_essential = 0.0;
   double median_parallax_deg = 0.0;
   geometry::SE3 T_second_first;  ///< Maps first-camera points into the second camera.
