@@ -3,7 +3,6 @@
 // order and reports the accepted loops, checked against the ground truth when the folder has one.
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/place_recognition_params_io.h"
@@ -164,23 +164,17 @@ int run(const sds::io::CommandLine& cl) {
   std::vector<double> query_ms;
   int true_loops = 0;
   int false_loops = 0;
-  using Clock = std::chrono::steady_clock;
-  const auto ms = [](Clock::time_point a, Clock::time_point b) {
-    return std::chrono::duration<double, std::milli>(b - a).count();
-  };
   for (std::size_t k : keyframes) {
     const cv::Mat image = cv::imread(frames[k].path, cv::IMREAD_GRAYSCALE);
     if (image.empty()) throw std::runtime_error("cannot read image " + frames[k].path);
-    const auto t0 = Clock::now();
+    sds::common::Stopwatch stage;
     sds::loop::KeyframeAppearance appearance = extractor.extract(image, camera.get());
-    const auto t1 = Clock::now();
+    extract_ms.push_back(stage.lapMs());
     const auto id = static_cast<sds::map::KeyframeId>(k);
     const sds::loop::PlaceQueryResult result =
         recognizer.query(id, frames[k].timestamp, appearance);
-    const auto t2 = Clock::now();
+    query_ms.push_back(stage.lapMs());
     recognizer.add(id, frames[k].timestamp, std::move(appearance));
-    extract_ms.push_back(ms(t0, t1));
-    query_ms.push_back(ms(t1, t2));
     queries << result.describe() << "\n";
     for (const sds::loop::LoopCandidate& c : result.candidates) {
       char line[256];

@@ -1,37 +1,13 @@
 #include "scale_drift_slam/tracking/tracker.h"
 
 #include <algorithm>
-#include <chrono>
-#include <ctime>
 #include <stdexcept>
 
 #include "scale_drift_slam/common/statistics.h"
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/map/map_update.h"
 
 namespace scale_drift_slam::tracking {
-namespace {
-
-class Stopwatch {
- public:
-  double lapMs() {
-    const auto now = std::chrono::steady_clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
-    last_ = now;
-    return ms;
-  }
-
- private:
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
-
-/// CPU time of the calling thread in milliseconds.
-double threadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
-}  // namespace
 
 void TrackerParams::validate() const {
   if (pyramid_levels < 1 || pyramid_levels > 8) {
@@ -93,8 +69,8 @@ Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const Trac
 
 FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
                                   features::PixelEncoding encoding) {
-  Stopwatch total, stage;
-  const double cpu_start = threadCpuMs();
+  common::Stopwatch total, stage;
+  const double cpu_start = common::threadCpuMs();
   FrameResult result;
   result.timestamp = timestamp;
   result.state = state_;
@@ -150,7 +126,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
       result.tracked_px.push_back(m.px);
   }
   result.times.total = total.lapMs();
-  result.times.cpu = threadCpuMs() - cpu_start;
+  result.times.cpu = common::threadCpuMs() - cpu_start;
   return result;
 }
 

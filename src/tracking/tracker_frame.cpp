@@ -1,37 +1,27 @@
 // Tracker: tracking one frame and dropping keyframes (the rest is in tracker.cpp).
 
 #include <algorithm>
-#include <chrono>
 
+#include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::tracking {
-namespace {
-
-double elapsedMs(std::chrono::steady_clock::time_point* last) {
-  const auto now = std::chrono::steady_clock::now();
-  const double ms = std::chrono::duration<double, std::milli>(now - *last).count();
-  *last = now;
-  return ms;
-}
-
-}  // namespace
 
 void Tracker::track(double timestamp, const features::ImagePyramid& image, FrameResult* result) {
-  auto clock = std::chrono::steady_clock::now();
+  common::Stopwatch stage;
   // 1. Motion prior: flow from the previous frame (its map points and the feature candidates).
   std::vector<cv::Point2f> candidate_px;
   std::vector<unsigned char> candidate_ok;
   const MotionPrior prior = estimatePrior(image, &candidate_px, &candidate_ok);
-  result->times.flow = elapsedMs(&clock);
+  result->times.flow = stage.lapMs();
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
   const std::vector<features::SearchMatch> matches = searchLocalMap(prior, image, &ids);
-  result->times.search = elapsedMs(&clock);
+  result->times.search = stage.lapMs();
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
   std::vector<Measurement> inliers;
   const geometry::SE3 T_cam_world = solvePose(prior, ids, matches, &inliers, result);
-  result->times.motion_ba = elapsedMs(&clock);
+  result->times.motion_ba = stage.lapMs();
 
   previous_image_ = image;
   const bool from_relocalisation = resume_from_relocalisation_;
@@ -66,13 +56,13 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   result->T_cam_world = T_cam_world;
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
   candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
-  result->times.filters = elapsedMs(&clock);
+  result->times.filters = stage.lapMs();
   // 6. The keyframe rule (tracking is good or weak here, not lost).
   const KeyframeDecision decision =
       decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
                      params_.keyframes, TrackedPoints{result->num_inliers, tracked_at_keyframe_});
   if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
-  result->times.keyframe = elapsedMs(&clock);
+  result->times.keyframe = stage.lapMs();
 }
 
 MotionPrior Tracker::estimatePrior(const features::ImagePyramid& image,
