@@ -6,9 +6,10 @@
 // node's RelocalisationRequests. The subscriber callbacks (main thread) only convert and queue; one
 // worker thread owns the LoopCloser and does the heavy work in arrival order, so no message waits
 // in roscpp's queues, and a relocalisation request overtakes the keyframes still queued (a lost
-// camera should not wait for a backlog). A keyframe of a new tracker session starts a new
+// camera should not wait for a backlog). The session rule is the core's, as offline
+// (system/loop_closer_endpoint.h): the first keyframe of a new tracker session starts a new
 // LoopCloser (with the camera the keyframe carries); a restarted mapping node is followed through
-// map version epochs (ros/map_versions.h), the map copy is kept.
+// map version epochs (system/map_versions.h), the map copy is kept.
 
 #include <thread>
 #include <variant>
@@ -17,11 +18,10 @@
 #include <opencv2/core.hpp>
 
 #include "scale_drift_slam/common/message_queue.h"
-#include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/ros/conversions.h"
-#include "scale_drift_slam/ros/map_versions.h"
 #include "scale_drift_slam/ros/node_params.h"
 #include "scale_drift_slam/ros/slam_messages.h"
+#include "scale_drift_slam/system/loop_closer_endpoint.h"
 
 namespace {
 
@@ -29,19 +29,17 @@ using namespace scale_drift_slam;
 
 /// What the callbacks hand to the worker: converted, not yet checked against the session.
 struct KeyframeInput {
-  std::uint32_t session = 0, mapper_id = 0;
+  system::Envelope from;
   map::KeyframeMessage keyframe;
   sensor_msgs::CameraInfo camera;
   std::string image_problem;  ///< Why the image was left out ("" when fine or absent).
   ros::Time stamp;
 };
 struct UpdateInput {
-  std::uint32_t session = 0, mapper_id = 0;
-  map::MapUpdate update;
+  system::Addressed<map::MapUpdate> update;
 };
 struct RequestInput {
-  std::uint32_t session = 0;
-  map::RelocalisationRequest request;
+  system::Addressed<map::RelocalisationRequest> request;
   ros::Time stamp;
 };
 using Input = std::variant<KeyframeInput, UpdateInput, RequestInput>;
@@ -85,13 +83,14 @@ class LoopClosureNode {
       ROS_ERROR_THROTTLE(5, "ignoring keyframe %u: %s", msg->id, e.what());
       return;
     }
-    queue(KeyframeInput{msg->session, msg->mapper_id, std::move(keyframe), msg->camera,
+    queue(KeyframeInput{ros_conversions::envelopeOf(*msg), std::move(keyframe), msg->camera,
                         std::move(image_problem), msg->header.stamp});
   }
 
   void onMapUpdate(const scale_drift_slam::MapUpdateConstPtr& msg) {
     try {
-      queue(UpdateInput{msg->session, msg->mapper_id, ros_conversions::fromMapUpdateMsg(*msg)});
+      queue(UpdateInput{
+          {ros_conversions::envelopeOf(*msg), ros_conversions::fromMapUpdateMsg(*msg)}});
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5, "ignoring a map update: %s", e.what());
     }
@@ -107,10 +106,11 @@ class LoopClosureNode {
       map::RelocalisationAnswer failed;
       failed.frame_index = msg->frame_index;
       failed.reason = std::string("unusable request: ") + e.what();
-      publishAnswer(failed, msg->session, msg->header.stamp);
+      publishAnswer({system::Envelope{msg->session, 0, 0}, failed}, msg->header.stamp);
       return;
     }
-    inbox_.pushUrgent(RequestInput{msg->session, std::move(request), msg->header.stamp});
+    inbox_.pushUrgent(
+        RequestInput{{ros_conversions::envelopeOf(*msg), std::move(request)}, msg->header.stamp});
   }
 
   void queue(Input input) {
@@ -123,15 +123,6 @@ class LoopClosureNode {
   // ---- worker thread: owns the LoopCloser ----
   void handle(KeyframeInput& in) {
     const map::KeyframeId id = in.keyframe.keyframe.id;
-    if (!closer_ || in.session != session_) {
-      if (!startSession(in)) return;
-    } else if (closer_->map().hasKeyframe(id)) {
-      ROS_WARN_THROTTLE(5, "keyframe %u is already in the loop closer's map: ignored", id);
-      return;
-    }
-    // Its map version in the loop closer's numbering; a mapper not met yet: no correction due.
-    in.keyframe.map_version =
-        versions_.toConsumer(in.mapper_id, in.keyframe.map_version).value_or(closer_->mapVersion());
     if (!in.image_problem.empty()) {
       ROS_WARN_THROTTLE(5,
                         "keyframe %u: its image is unusable (%s): stored without it, no loop "
@@ -141,108 +132,86 @@ class LoopClosureNode {
       ROS_WARN_THROTTLE(5, "keyframe %u carries no image: stored without it, no loop search for it",
                         id);
     }
-    try {
-      const loop::LoopDetection detection = closer_->addKeyframe(std::move(in.keyframe));
-      if (detection.verification || !detection.recognition.candidates.empty()) {
-        ROS_INFO("keyframe %u: %s (%.0f + %.0f ms)", id, detection.describe().c_str(),
-                 detection.recognition_ms, detection.verification_ms);
-      }
-      if (!detection.constraint) return;
-      scale_drift_slam::Sim3Constraint out =
-          ros_conversions::toSim3ConstraintMsg(*detection.constraint);
-      out.header.stamp = in.stamp;
-      out.session = session_;
-      constraint_pub_.publish(out);
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "keyframe %u not added: %s", id, e.what());
+    const bool had_session = endpoint_.closer() != nullptr;
+    std::string camera;  // described when the keyframe starts a session
+    const system::LoopCloserEndpoint::KeyframeOutcome outcome =
+        endpoint_.addKeyframe(in.from, std::move(in.keyframe), [&] {
+          const geometry::CameraCalibration calibration =
+              ros_conversions::calibrationFromCameraInfo(in.camera);
+          camera = calibration.describe();
+          return geometry::makeCameraModel(calibration);
+        });
+    if (!outcome.added) {
+      ROS_WARN_THROTTLE(5, "%s: ignored", outcome.refusal.c_str());
+      return;
     }
-  }
-
-  /// A new LoopCloser for the keyframe's session and camera; false (logged) when unusable.
-  bool startSession(const KeyframeInput& in) {
-    const bool had_session = closer_ != nullptr;
-    closer_.reset();
-    versions_.reset();
-    session_ = in.session;
-    try {
-      const geometry::CameraCalibration camera =
-          ros_conversions::calibrationFromCameraInfo(in.camera);
-      closer_ =
-          std::make_unique<loop::LoopCloser>(geometry::makeCameraModel(camera), config_.slam.loop);
-      const std::string text = "new loop closer from keyframe " +
-                               std::to_string(in.keyframe.keyframe.id) + " of tracker session " +
-                               std::to_string(in.session) + "; camera " + camera.describe();
+    if (outcome.new_session) {
+      const std::string text = "new loop closer from keyframe " + std::to_string(id) +
+                               " of tracker session " + std::to_string(in.from.session) +
+                               "; camera " + camera;
       if (had_session) {
         ROS_WARN("%s (a new tracker session: the tracker was reset or restarted)", text.c_str());
       } else {
         ROS_INFO("%s", text.c_str());
       }
-      return true;
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "keyframe %u: no loop closer: %s", in.keyframe.keyframe.id, e.what());
-      return false;
     }
+    const loop::LoopDetection& detection = *outcome.detection;
+    if (detection.verification || !detection.recognition.candidates.empty()) {
+      ROS_INFO("keyframe %u: %s (%.0f + %.0f ms)", id, detection.describe().c_str(),
+               detection.recognition_ms, detection.verification_ms);
+    }
+    if (!outcome.constraint) return;
+    scale_drift_slam::Sim3Constraint out =
+        ros_conversions::toSim3ConstraintMsg(outcome.constraint->message);
+    out.header.stamp = in.stamp;
+    ros_conversions::setEnvelope(outcome.constraint->from, &out);
+    constraint_pub_.publish(out);
   }
 
   void handle(UpdateInput& in) {
-    if (!closer_ || in.session != session_) return;  // built from another session's keyframes
-    bool new_mapper = false;
-    const std::optional<std::uint64_t> version = versions_.toTracker(
-        in.mapper_id, in.update.map_version, closer_->mapVersion(), &new_mapper);
-    if (new_mapper && closer_->mapVersion() > 0) {
+    const bool loop_correction = in.update.message.isLoopCorrection();
+    const system::LoopCloserEndpoint::UpdateOutcome outcome =
+        endpoint_.applyMapUpdate(in.update.from, std::move(in.update.message));
+    if (outcome.new_mapper) {
       ROS_WARN(
           "map updates from a new mapper (restarted or reset): keeping the loop closer's "
           "map; loops to keyframes the new mapper does not hold will be refused by it");
     }
-    if (!version) return;  // of a retired mapper
-    in.update.map_version = *version;
-    try {
-      closer_->applyMapUpdate(in.update);
-      if (in.update.isLoopCorrection()) {
-        ROS_INFO("loop correction applied to the loop closer's map (version %lu)",
-                 static_cast<unsigned long>(*version));
-      }
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "map update not applied: %s", e.what());
+    if (outcome.applied && loop_correction) {
+      ROS_INFO("loop correction applied to the loop closer's map (version %lu)",
+               static_cast<unsigned long>(endpoint_.closer()->mapVersion()));
     }
   }
 
   void handle(RequestInput& in) {
     const ros::WallTime start = ros::WallTime::now();
-    map::RelocalisationAnswer answer;
-    if (!closer_ || in.session != session_) {
-      answer.frame_index = in.request.frame_index;
-      answer.reason = "the loop closer holds no keyframe of this tracker session";
-    } else {
-      try {
-        answer = closer_->relocalise(in.request);
-      } catch (const std::exception& e) {
-        answer.frame_index = in.request.frame_index;
-        answer.reason = e.what();
-      }
+    system::Addressed<map::RelocalisationAnswer> answer;
+    try {
+      answer = endpoint_.relocalise(in.request.from, in.request.message);
+    } catch (const std::exception& e) {
+      answer = {system::Envelope{in.request.from.session, 0, 0}, {}};
+      answer.message.frame_index = in.request.message.frame_index;
+      answer.message.reason = e.what();
     }
+    const map::RelocalisationAnswer& a = answer.message;
     const double ms = (ros::WallTime::now() - start).toSec() * 1e3;
-    if (answer.success) {
+    if (a.success) {
       ROS_INFO("relocalised frame %lu against keyframe %u: %d inliers (%.0f ms)",
-               static_cast<unsigned long>(answer.frame_index), answer.keyframe_id, answer.inliers,
-               ms);
+               static_cast<unsigned long>(a.frame_index), a.keyframe_id, a.inliers, ms);
     } else {  // a lost tracker asks again at each frame once answered: one line a second
       ROS_INFO_THROTTLE(1, "relocalisation of frame %lu failed: %s (%.0f ms)",
-                        static_cast<unsigned long>(answer.frame_index), answer.reason.c_str(), ms);
+                        static_cast<unsigned long>(a.frame_index), a.reason.c_str(), ms);
     }
-    publishAnswer(answer, in.session, in.stamp);
+    publishAnswer(answer, in.stamp);
   }
 
-  /// Any thread: publishers are thread-safe; versions_ is read only on the worker (or unused).
-  void publishAnswer(const map::RelocalisationAnswer& answer, std::uint32_t session,
+  /// Any thread: publishers are thread-safe.
+  void publishAnswer(const system::Addressed<map::RelocalisationAnswer>& answer,
                      const ros::Time& stamp) {
-    scale_drift_slam::RelocalisationAnswer out = ros_conversions::toRelocalisationAnswerMsg(answer);
+    scale_drift_slam::RelocalisationAnswer out =
+        ros_conversions::toRelocalisationAnswerMsg(answer.message);
     out.header.stamp = stamp;
-    out.session = session;
-    if (answer.success) {
-      out.mapper_id = versions_.mapperId();
-      out.map_version = versions_.toMapper(answer.map_version);
-    }
+    ros_conversions::setEnvelope(answer.from, &out);
     answer_pub_.publish(out);
   }
 
@@ -250,10 +219,8 @@ class LoopClosureNode {
   ros::Subscriber keyframe_sub_, update_sub_, request_sub_;
   ros::Publisher constraint_pub_, answer_pub_;
   common::MessageQueue<Input> inbox_;
-  // The worker's:
-  std::unique_ptr<loop::LoopCloser> closer_;  ///< Made at a session's first keyframe.
-  std::uint32_t session_ = 0;
-  ros_conversions::MapVersionTranslator versions_;
+  /// The worker's: the loop closer and its session rule (system/loop_closer_endpoint.h).
+  system::LoopCloserEndpoint endpoint_{config_.slam.loop};
   std::thread worker_;  // last: starts after everything it uses
 };
 

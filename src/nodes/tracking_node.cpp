@@ -25,8 +25,8 @@
 #include "scale_drift_slam/ros/image_conversions.h"
 #include "scale_drift_slam/ros/node_params.h"
 #include "scale_drift_slam/ros/slam_messages.h"
-#include "scale_drift_slam/ros/tracker_inbox.h"
 #include "scale_drift_slam/ros/visualization.h"
+#include "scale_drift_slam/system/tracker_inbox.h"
 
 namespace {
 
@@ -37,21 +37,19 @@ class TrackingNode {
   TrackingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh,
                ros_conversions::TrackingNodeConfig config)
       : config_(std::move(config)), params_(config_.node), it_(nh), odom_(params_.map_z_up) {
-    session_ = newSession();
+    inbox_.startSession(newSession());
     if (config_.calibration) setCamera(*config_.calibration);
     subscribeImages(nh);
     info_sub_ = nh.subscribe("camera_info", 5, &TrackingNode::onCameraInfo, this);
     ros::SubscribeOptions options = ros::SubscribeOptions::create<scale_drift_slam::MapUpdate>(
         "map_updates", 20,
-        [this](const scale_drift_slam::MapUpdateConstPtr& msg) { receive(*msg, "map update"); },
-        ros::VoidPtr(), &update_queue_);
+        [this](const scale_drift_slam::MapUpdateConstPtr& msg) { receive(*msg); }, ros::VoidPtr(),
+        &update_queue_);
     update_sub_ = nh.subscribe(options);
     ros::SubscribeOptions answers =
         ros::SubscribeOptions::create<scale_drift_slam::RelocalisationAnswer>(
             "relocalisation_answers", 5,
-            [this](const scale_drift_slam::RelocalisationAnswerConstPtr& msg) {
-              receive(*msg, "relocalisation answer");
-            },
+            [this](const scale_drift_slam::RelocalisationAnswerConstPtr& msg) { receive(*msg); },
             ros::VoidPtr(), &update_queue_);
     answer_sub_ = nh.subscribe(answers);
     keyframe_pub_ = nh.advertise<scale_drift_slam::Keyframe>("keyframes", 20);
@@ -108,8 +106,7 @@ class TrackingNode {
   /// A new map: its keyframes carry a new session, on which the mapper and the loop closer
   /// start afresh; what they still send about the old map is dropped.
   void startSession() {
-    session_ = newSession();
-    inbox_.reset();
+    inbox_.startSession(newSession());
     odom_.reset();
     path_.clear();
     last_state_.reset();
@@ -180,19 +177,26 @@ class TrackingNode {
   }
 
   /// Called on the update thread: convert and queue, never touch the tracker.
-  template <typename Message>
-  void receive(const Message& msg, const char* what) {
+  void receive(const scale_drift_slam::MapUpdate& msg) {
     try {
-      inbox_.push(msg);
+      inbox_.push(system::Addressed<map::MapUpdate>{ros_conversions::envelopeOf(msg),
+                                                    ros_conversions::fromMapUpdateMsg(msg)});
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "ignoring a %s: %s", what, e.what());
+      ROS_ERROR_THROTTLE(5, "ignoring a map update: %s", e.what());
+    }
+  }
+  void receive(const scale_drift_slam::RelocalisationAnswer& msg) {
+    try {
+      inbox_.push(system::Addressed<map::RelocalisationAnswer>{
+          ros_conversions::envelopeOf(msg), ros_conversions::fromRelocalisationAnswerMsg(msg)});
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(5, "ignoring a relocalisation answer: %s", e.what());
     }
   }
 
   /// Before each frame: the map updates and relocalisation answers that arrived since.
   void applyReceived() {
-    const ros_conversions::TrackerInbox::Report report =
-        inbox_.drain(session_, *tracker_, path_.trajectory());
+    const system::TrackerInbox::Report report = inbox_.drain(*tracker_, path_.trajectory());
     if (report.new_mapper) {
       ROS_WARN(
           "map updates from a new mapper (restarted or reset): keeping the tracker's map, "
@@ -219,9 +223,7 @@ class TrackingNode {
     }
     for (const map::KeyframeMessage& keyframe : result.keyframes) {
       scale_drift_slam::Keyframe msg = ros_conversions::toKeyframeMsg(keyframe);
-      msg.session = session_;
-      msg.mapper_id = inbox_.mapperId();
-      msg.map_version = inbox_.toMapper(keyframe.map_version);
+      ros_conversions::setEnvelope(inbox_.address(keyframe.map_version), &msg);
       msg.camera = camera_info_;
       msg.camera.header.stamp = msg.header.stamp;
       keyframe_pub_.publish(msg);
@@ -230,11 +232,11 @@ class TrackingNode {
     scale_drift_slam::TrackingStatus status = ros_conversions::toTrackingStatusMsg(result);
     status.header.stamp = header.stamp;
     status.header.frame_id = params_.frames.optical;
-    status.session = session_;
+    status.session = inbox_.session();
     status.keyframes = static_cast<std::uint32_t>(tracker_->trackingMap().numKeyframes());
     status.map_points = static_cast<std::uint32_t>(tracker_->trackingMap().numPoints());
     status.candidates = static_cast<std::uint32_t>(tracker_->numCandidates());
-    status.map_version = inbox_.toMapper(tracker_->trackingMap().version());
+    status.map_version = inbox_.address(tracker_->trackingMap().version()).map_version;
     status_pub_.publish(status);
     if (result.has_pose) {
       path_.add(header.stamp.toSec(), result.T_cam_world, result.reference_keyframe);
@@ -270,9 +272,7 @@ class TrackingNode {
   void publishRequest(const map::RelocalisationRequest& request) {
     scale_drift_slam::RelocalisationRequest msg =
         ros_conversions::toRelocalisationRequestMsg(request);
-    msg.session = session_;
-    msg.mapper_id = inbox_.mapperId();
-    msg.map_version = inbox_.toMapper(request.map_version);
+    ros_conversions::setEnvelope(inbox_.address(request.map_version), &msg);
     request_pub_.publish(msg);
     ROS_INFO_THROTTLE(5, "lost: relocalisation of frame %lu requested",
                       static_cast<unsigned long>(request.frame_index));
@@ -296,7 +296,7 @@ class TrackingNode {
       response.message = "no camera yet: nothing to reset";
     } else {
       resetTracker("~reset was called");
-      response.message = "tracker reset; new session " + std::to_string(session_);
+      response.message = "tracker reset; new session " + std::to_string(inbox_.session());
     }
     response.success = true;
     return true;
@@ -319,8 +319,7 @@ class TrackingNode {
   std::shared_ptr<const geometry::CameraModel> camera_;
   sensor_msgs::CameraInfo camera_info_;
   std::unique_ptr<tracking::Tracker> tracker_;
-  std::uint32_t session_ = 0;
-  ros_conversions::TrackerInbox inbox_;  ///< Map updates and relocalisation answers.
+  system::TrackerInbox inbox_;  ///< Map updates and relocalisation answers; the session.
   ros_conversions::OdomFrame odom_;
   ros::Time last_stamp_;
   std::optional<tracking::TrackingState> last_state_;

@@ -20,8 +20,10 @@ SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camer
     : params_(params),
       camera_(camera),
       tracker_(camera, params.tracker),
-      mapper_(params.mapper, focalOf(camera)),
-      loop_closer_(camera, params.loop) {
+      mapper_(params.mapper, /*mapper_id=*/1),
+      loop_closer_(params.loop) {
+  focalOf(camera_);  // throws without a camera
+  tracker_inbox_.startSession(session_);
   if (params_.mapping_thread) {
     mapping_thread_ = std::thread([this] {
       while (std::optional<MapperInput> input = mapper_inbox_.waitPop())
@@ -50,49 +52,38 @@ void SlamSystem::finish() {
   } else {
     runInline();
   }
-  drainTrackerInbox();
+  tracker_inbox_.drain(tracker_, trajectory_);
 }
 
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
                                                features::PixelEncoding encoding) {
-  drainTrackerInbox();
+  tracker_inbox_.drain(tracker_, trajectory_);
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
   if (result.map_restarted) {
-    ++tracker_generation_;
+    // A new session: its first keyframe starts a new map at the mapper and the loop closer.
+    tracker_inbox_.startSession(++session_);
     ++map_restarts_;
     trajectory_ = map::CorrectedTrajectory();  // its frames are in the discarded map's frame
-    if (!finished_) {
-      mapper_inbox_.push(MapRestart{});
-      loop_inbox_.push(MapRestart{});
-    }
   }
   if (result.has_pose) trajectory_.add(timestamp, result.T_cam_world, result.reference_keyframe);
   if (!finished_) {
     for (const map::KeyframeMessage& message : result.keyframes) {
       // Both receivers get their own copy (the image buffer is shared, read-only).
-      mapper_inbox_.push(message);
-      loop_inbox_.push(message);
+      const Envelope from = tracker_inbox_.address(message.map_version);
+      mapper_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
+      loop_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
     }
     // Ahead of the keyframes waiting there, as the ROS tracking node's request overtakes them.
-    if (result.relocalisation_request) loop_inbox_.pushUrgent(*result.relocalisation_request);
+    if (const auto& request = result.relocalisation_request) {
+      loop_inbox_.pushUrgent(Addressed<map::RelocalisationRequest>{
+          tracker_inbox_.address(request->map_version), *request});
+    }
   }
   if (!params_.mapping_thread) {
     runInline();
-    drainTrackerInbox();
+    tracker_inbox_.drain(tracker_, trajectory_);
   }
   return result;
-}
-
-void SlamSystem::drainTrackerInbox() {
-  while (std::optional<TrackerInput> input = tracker_inbox_.tryPop()) {
-    if (input->generation != tracker_generation_) continue;  // about a discarded map
-    if (const auto* update = std::get_if<map::MapUpdate>(&input->message)) {
-      tracker_.applyMapUpdate(*update);
-      trajectory_.apply(*update);
-    } else {
-      tracker_.applyRelocalisation(std::get<map::RelocalisationAnswer>(input->message));
-    }
-  }
 }
 
 void SlamSystem::runInline() {
@@ -110,9 +101,9 @@ void SlamSystem::runInline() {
   }
 }
 
-void SlamSystem::publishUpdate(map::MapUpdate update) {
-  loop_inbox_.push(OfGeneration<map::MapUpdate>{mapper_generation_, update});
-  tracker_inbox_.push(TrackerInput{mapper_generation_, std::move(update)});
+void SlamSystem::publishUpdate(Addressed<map::MapUpdate> update) {
+  loop_inbox_.push(update);
+  tracker_inbox_.push(std::move(update));
 }
 
 template <typename Input>
@@ -127,37 +118,45 @@ void SlamSystem::handleSafely(Input input) {
 
 void SlamSystem::handle(MapperInput input) {
   const common::Stopwatch timer;
-  if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
-    map::MapUpdate update = mapper_.addKeyframe(std::move(*message));
+  if (auto* keyframe = std::get_if<Addressed<map::KeyframeMessage>>(&input)) {
+    const bool had_map = mapper_.map().numKeyframes() > 0;
+    MapperEndpoint::KeyframeOutcome outcome = mapper_.addKeyframe(
+        keyframe->from, std::move(keyframe->message), [this] { return focalOf(camera_); });
+    if (!outcome.added) {
+      log("keyframe refused by the mapper: " + outcome.refusal);
+      return;
+    }
+    if (outcome.new_map && had_map) {
+      log("map restarted: the tracker discarded a young map it was lost in");
+    }
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
       times_.window_ba_ms.push_back(timer.ms());
     }
-    publishUpdate(std::move(update));
+    publishUpdate(std::move(*outcome.update));
     return;
   }
-  if (std::holds_alternative<MapRestart>(input)) {
-    ++mapper_generation_;
-    mapper_ = mapping::Mapper(params_.mapper, focalOf(camera_));
-    log("map restarted: the tracker discarded a young map it was lost in");
-    return;
-  }
-  const auto& [generation, constraint] = std::get<OfGeneration<loop::LoopConstraint>>(input);
-  if (generation != mapper_generation_) return;  // found in a discarded map
-  mapping::LoopCorrectionStatistics c;
-  map::MapUpdate update = mapper_.closeLoop(constraint, &c);
-  log(c.describe());
+  const auto& [from, constraint] = std::get<Addressed<loop::LoopConstraint>>(input);
+  MapperEndpoint::LoopOutcome outcome = mapper_.closeLoop(from, constraint);
+  if (outcome.stale) return;  // found in a discarded map
+  log(outcome.statistics.describe());
   {
     std::lock_guard<std::mutex> lock(record_mutex_);
-    loops_.push_back(c);
+    loops_.push_back(outcome.statistics);
   }
-  if (c.applied) publishUpdate(std::move(update));
+  if (outcome.update) publishUpdate(std::move(*outcome.update));
 }
 
 void SlamSystem::handle(LoopInput input) {
   const common::Stopwatch timer;
-  if (auto* message = std::get_if<map::KeyframeMessage>(&input)) {
-    const loop::LoopDetection detection = loop_closer_.addKeyframe(std::move(*message));
+  if (auto* keyframe = std::get_if<Addressed<map::KeyframeMessage>>(&input)) {
+    LoopCloserEndpoint::KeyframeOutcome outcome = loop_closer_.addKeyframe(
+        keyframe->from, std::move(keyframe->message), [this] { return camera_; });
+    if (!outcome.added) {
+      log("keyframe refused by the loop closer: " + outcome.refusal);
+      return;
+    }
+    const loop::LoopDetection& detection = *outcome.detection;
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
       times_.place_recognition_ms.push_back(detection.recognition_ms);
@@ -166,31 +165,26 @@ void SlamSystem::handle(LoopInput input) {
     if (detection.verification || !detection.recognition.candidates.empty()) {
       log(detection.describe());
     }
-    if (detection.constraint) {
-      mapper_inbox_.push(
-          OfGeneration<loop::LoopConstraint>{loop_generation_, *detection.constraint});
-    }
-  } else if (auto* update = std::get_if<OfGeneration<map::MapUpdate>>(&input)) {
-    if (update->generation == loop_generation_) loop_closer_.applyMapUpdate(update->message);
-  } else if (std::holds_alternative<MapRestart>(input)) {
-    ++loop_generation_;
-    loop_closer_ = loop::LoopCloser(camera_, params_.loop);
+    if (outcome.constraint) mapper_inbox_.push(std::move(*outcome.constraint));
+  } else if (auto* update = std::get_if<Addressed<map::MapUpdate>>(&input)) {
+    loop_closer_.applyMapUpdate(update->from, std::move(update->message));
   } else {
-    const map::RelocalisationAnswer answer =
-        loop_closer_.relocalise(std::get<map::RelocalisationRequest>(input));
+    const auto& request = std::get<Addressed<map::RelocalisationRequest>>(input);
+    Addressed<map::RelocalisationAnswer> answer =
+        loop_closer_.relocalise(request.from, request.message);
+    const map::RelocalisationAnswer& a = answer.message;
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
       times_.relocalisation_ms.push_back(timer.ms());
-      relocalisations_ += answer.success;
+      relocalisations_ += a.success;
     }
-    log("relocalisation of frame " + std::to_string(answer.frame_index) + ": " +
-        (answer.success ? "against keyframe " + std::to_string(answer.keyframe_id) + ", " +
-                              std::to_string(answer.inliers) + " inliers"
-                        : "failed: " + answer.reason));
-    tracker_inbox_.push(TrackerInput{loop_generation_, answer});
+    log("relocalisation of frame " + std::to_string(a.frame_index) + ": " +
+        (a.success ? "against keyframe " + std::to_string(a.keyframe_id) + ", " +
+                         std::to_string(a.inliers) + " inliers"
+                   : "failed: " + a.reason));
+    tracker_inbox_.push(std::move(answer));
   }
 }
-
 void SlamSystem::log(std::string line) {
   std::lock_guard<std::mutex> lock(record_mutex_);
   log_.push_back(std::move(line));

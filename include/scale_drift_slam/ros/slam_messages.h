@@ -16,6 +16,7 @@
 #include "scale_drift_slam/TrackingStatus.h"
 #include "scale_drift_slam/loop/loop_constraint.h"
 #include "scale_drift_slam/map/keyframe_message.h"
+#include "scale_drift_slam/system/envelope.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::ros_conversions {
@@ -58,6 +59,26 @@ scale_drift_slam::RelocalisationAnswer toRelocalisationAnswerMsg(
 /// Throws std::invalid_argument for a non-finite pose of a successful answer or non-finite points.
 map::RelocalisationAnswer fromRelocalisationAnswerMsg(
     const scale_drift_slam::RelocalisationAnswer& msg);
+
+/// The address (system/envelope.h) in a message's session, mapper_id and map_version fields.
+template <typename Message>
+system::Envelope envelopeOf(const Message& msg) {
+  return {msg.session, msg.mapper_id, msg.map_version};
+}
+/// A loop constraint names its session only: it is applied to that session's map as it is.
+inline system::Envelope envelopeOf(const scale_drift_slam::Sim3Constraint& msg) {
+  return {msg.session, 0, 0};
+}
+/// Writes the address into the message's session, mapper_id and map_version fields.
+template <typename Message>
+void setEnvelope(const system::Envelope& from, Message* msg) {
+  msg->session = from.session;
+  msg->mapper_id = from.mapper_id;
+  msg->map_version = from.map_version;
+}
+inline void setEnvelope(const system::Envelope& from, scale_drift_slam::Sim3Constraint* msg) {
+  msg->session = from.session;
+}
 
 /// The frame's verdict; header, session, map sizes and map version are the caller's.
 scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result);

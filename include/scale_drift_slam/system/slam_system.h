@@ -8,10 +8,12 @@
 // Whatever arrives for the tracker is applied at the start of the next frame, so tracking never
 // waits for the window BA, a loop correction or a relocalisation. With `mapping_thread = false`
 // the mapper and the loop closer run inline after each frame (deterministic, for tests).
-// When the tracker restarts a young lost map (FrameResult::map_restarted), a restart marker follows
-// the old keyframes down both queues; the mapper and the loop closer start afresh on it, and
+// Every message is addressed with its tracker session and map version (envelope.h), and each part
+// applies the same session rule as the ROS nodes do (mapper_endpoint.h, loop_closer_endpoint.h,
+// tracker_inbox.h): when the tracker restarts a young lost map (FrameResult::map_restarted) it
+// starts a new session; its first keyframe starts a new map at the mapper and the loop closer, and
 // anything made from the old map that is still under way (map updates, loop constraints,
-// relocalisation answers) is dropped on arrival: each message carries its map generation.
+// relocalisation answers) is dropped on arrival.
 // Owns the Tracker, the Mapper, the LoopCloser, the queues and the threads.
 
 #include <memory>
@@ -23,11 +25,13 @@
 
 #include "scale_drift_slam/common/message_queue.h"
 #include "scale_drift_slam/geometry/camera_model.h"
-#include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/map/corrected_trajectory.h"
 #include "scale_drift_slam/map/keyframe_message.h"
-#include "scale_drift_slam/mapping/mapper.h"
+#include "scale_drift_slam/system/envelope.h"
+#include "scale_drift_slam/system/loop_closer_endpoint.h"
+#include "scale_drift_slam/system/mapper_endpoint.h"
 #include "scale_drift_slam/system/slam_params.h"
+#include "scale_drift_slam/system/tracker_inbox.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::system {
@@ -71,45 +75,35 @@ class SlamSystem {
   std::vector<std::string> takeLog();
 
  private:
-  struct MapRestart {};  ///< The tracker started a new map: so do the receivers.
-  /// A message made by one thread from the map of a generation (number of restarts before it).
-  template <typename Message>
-  struct OfGeneration {
-    std::uint64_t generation = 0;
-    Message message;
-  };
   using MapperInput =
-      std::variant<map::KeyframeMessage, OfGeneration<loop::LoopConstraint>, MapRestart>;
-  using LoopInput = std::variant<map::KeyframeMessage, OfGeneration<map::MapUpdate>,
-                                 map::RelocalisationRequest, MapRestart>;
-  using TrackerInput = OfGeneration<std::variant<map::MapUpdate, map::RelocalisationAnswer>>;
+      std::variant<Addressed<map::KeyframeMessage>, Addressed<loop::LoopConstraint>>;
+  using LoopInput = std::variant<Addressed<map::KeyframeMessage>, Addressed<map::MapUpdate>,
+                                 Addressed<map::RelocalisationRequest>>;
 
-  void drainTrackerInbox();
   void runInline();
   template <typename Input>
   void handleSafely(Input input);
   void handle(MapperInput input);
   void handle(LoopInput input);
-  void publishUpdate(map::MapUpdate update);
+  void publishUpdate(Addressed<map::MapUpdate> update);
   void log(std::string line);
 
   SlamParams params_;
   std::shared_ptr<const geometry::CameraModel> camera_;
   tracking::Tracker tracker_;
-  mapping::Mapper mapper_;
-  loop::LoopCloser loop_closer_;
+  MapperEndpoint mapper_;           ///< The mapping thread's.
+  LoopCloserEndpoint loop_closer_;  ///< The loop thread's.
   map::CorrectedTrajectory trajectory_;
+  std::uint32_t session_ = 1;  ///< The tracker's; a new one at each map restart.
   common::MessageQueue<MapperInput> mapper_inbox_;
   common::MessageQueue<LoopInput> loop_inbox_;
-  common::MessageQueue<TrackerInput> tracker_inbox_;
+  TrackerInbox tracker_inbox_;
   mutable std::mutex record_mutex_;  ///< Guards the records below (written by the threads).
   std::vector<mapping::LoopCorrectionStatistics> loops_;
   BackgroundTimes times_;
   std::vector<std::string> log_;
   int relocalisations_ = 0;
   int map_restarts_ = 0;
-  // The map generation each thread works on (each touched by its own thread only).
-  std::uint64_t tracker_generation_ = 0, mapper_generation_ = 0, loop_generation_ = 0;
   std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };

@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "scale_drift_slam/ros/map_versions.h"
+#include "scale_drift_slam/system/map_versions.h"
 
-namespace scale_drift_slam::ros_conversions {
+namespace scale_drift_slam::system {
 namespace {
 
 TEST(MapVersions, FirstMapperPassesUnchanged) {
@@ -73,4 +73,4 @@ TEST(MapVersions, ReportedVersionsOfNamedMappersComeBack) {
 }
 
 }  // namespace
-}  // namespace scale_drift_slam::ros_conversions
+}  // namespace scale_drift_slam::system

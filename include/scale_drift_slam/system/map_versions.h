@@ -12,7 +12,7 @@
 #include <map>
 #include <optional>
 
-namespace scale_drift_slam::ros_conversions {
+namespace scale_drift_slam::system {
 
 class MapVersionTranslator {
  public:
@@ -48,4 +48,4 @@ class MapVersionTranslator {
   std::map<std::uint32_t, Epoch> retired_;
 };
 
-}  // namespace scale_drift_slam::ros_conversions
+}  // namespace scale_drift_slam::system

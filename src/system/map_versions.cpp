@@ -1,8 +1,8 @@
-#include "scale_drift_slam/ros/map_versions.h"
+#include "scale_drift_slam/system/map_versions.h"
 
 #include <algorithm>
 
-namespace scale_drift_slam::ros_conversions {
+namespace scale_drift_slam::system {
 
 std::uint64_t MapVersionTranslator::translate(const Epoch& epoch, std::uint64_t mapper_version) {
   if (mapper_version >= epoch.first_mapper_version) {
@@ -46,4 +46,4 @@ std::optional<std::uint64_t> MapVersionTranslator::toConsumer(std::uint32_t mapp
   return std::nullopt;
 }
 
-}  // namespace scale_drift_slam::ros_conversions
+}  // namespace scale_drift_slam::system

@@ -1,0 +1,87 @@
+#include "scale_drift_slam/system/loop_closer_endpoint.h"
+
+#include <utility>
+
+namespace scale_drift_slam::system {
+
+LoopCloserEndpoint::LoopCloserEndpoint(loop::LoopCloserParams params) : params_(std::move(params)) {
+  params_.validate();
+}
+
+LoopCloserEndpoint::KeyframeOutcome LoopCloserEndpoint::addKeyframe(const Envelope& from,
+                                                                    map::KeyframeMessage keyframe,
+                                                                    const CameraSource& camera) {
+  KeyframeOutcome outcome;
+  const map::KeyframeId id = keyframe.keyframe.id;
+  if (!keyframe.keyframe.T_kf_world.matrix().allFinite()) {
+    outcome.refusal = "keyframe " + std::to_string(id) + " has a non-finite pose";
+    return outcome;
+  }
+  if (!isCurrent(from.session) && closer_ && id != 0) {
+    // A new tracker session begins with keyframe 0; anything else would throw away the
+    // loop closer's map for a message that cannot be the start of one (stray or forged).
+    outcome.refusal = "keyframe " + std::to_string(id) + " of tracker session " +
+                      std::to_string(from.session) +
+                      " does not begin a map: the loop closer's map of session " +
+                      std::to_string(session_) + " is kept";
+    return outcome;
+  }
+  if (!isCurrent(from.session)) {
+    // A new session: the camera is checked before the old loop closer goes.
+    std::shared_ptr<const geometry::CameraModel> model;
+    try {
+      model = camera();
+    } catch (const std::exception& e) {
+      outcome.refusal = "keyframe " + std::to_string(id) + " cannot start a session: " + e.what();
+      return outcome;
+    }
+    if (!model) {
+      outcome.refusal = "keyframe " + std::to_string(id) + " cannot start a session: no camera";
+      return outcome;
+    }
+    closer_.emplace(std::move(model), params_);
+    versions_.reset();
+    session_ = from.session;
+    outcome.new_session = true;
+  } else if (closer_->map().hasKeyframe(id)) {
+    outcome.refusal = "keyframe " + std::to_string(id) + " is already in the loop closer's map";
+    return outcome;
+  }
+  // Its version in the loop closer's numbering; of a mapper not met yet: no correction is due.
+  keyframe.map_version =
+      versions_.toConsumer(from.mapper_id, from.map_version).value_or(closer_->mapVersion());
+  outcome.detection = closer_->addKeyframe(std::move(keyframe));
+  outcome.added = true;
+  if (outcome.detection->constraint) {
+    outcome.constraint = {address(closer_->mapVersion()), *outcome.detection->constraint};
+  }
+  return outcome;
+}
+
+LoopCloserEndpoint::UpdateOutcome LoopCloserEndpoint::applyMapUpdate(const Envelope& from,
+                                                                     map::MapUpdate update) {
+  UpdateOutcome outcome;
+  if (!isCurrent(from.session)) return outcome;  // built from another session's keyframes
+  const std::optional<std::uint64_t> version = versions_.toTracker(
+      from.mapper_id, from.map_version, closer_->mapVersion(), &outcome.new_mapper);
+  outcome.new_mapper = outcome.new_mapper && closer_->mapVersion() > 0;
+  if (!version) return outcome;  // of a retired mapper
+  update.map_version = *version;
+  closer_->applyMapUpdate(update);
+  outcome.applied = true;
+  return outcome;
+}
+
+Addressed<map::RelocalisationAnswer> LoopCloserEndpoint::relocalise(
+    const Envelope& from, const map::RelocalisationRequest& request) {
+  if (!isCurrent(from.session)) {
+    map::RelocalisationAnswer answer;
+    answer.frame_index = request.frame_index;
+    answer.reason = "the loop closer holds no keyframe of this tracker session";
+    return {Envelope{from.session, 0, 0}, answer};
+  }
+  map::RelocalisationAnswer answer = closer_->relocalise(request);
+  return {address(answer.map_version), std::move(answer)};
+}
+
+}  // namespace scale_drift_slam::system

@@ -1,0 +1,88 @@
+#include "scale_drift_slam/system/mapper_endpoint.h"
+
+#include <cmath>
+#include <utility>
+
+namespace scale_drift_slam::system {
+
+MapperEndpoint::MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id)
+    : params_(std::move(params)), mapper_id_(mapper_id) {
+  params_.validate();
+}
+
+MapperEndpoint::KeyframeOutcome MapperEndpoint::addKeyframe(
+    const Envelope& from, map::KeyframeMessage keyframe,
+    const std::function<double()>& focal_length_px) {
+  KeyframeOutcome outcome;
+  const map::KeyframeId id = keyframe.keyframe.id;
+  if (!keyframe.keyframe.T_kf_world.matrix().allFinite()) {
+    outcome.refusal = "keyframe " + std::to_string(id) + " has a non-finite pose";
+    return outcome;
+  }
+  if (!isCurrent(from.session) && mapper_ && id != 0) {
+    // A new tracker session begins with keyframe 0; anything else would throw away the
+    // map for a message that cannot be the start of one (stray or forged).
+    outcome.refusal = "keyframe " + std::to_string(id) + " of tracker session " +
+                      std::to_string(from.session) + " does not begin a map: the map of session " +
+                      std::to_string(session_) + " is kept";
+    return outcome;
+  }
+  if (!isCurrent(from.session)) {
+    // A new map: everything that can refuse the keyframe is checked before the old one goes.
+    double focal = 0.0;
+    try {
+      focal = focal_length_px();
+    } catch (const std::exception& e) {
+      outcome.refusal = "keyframe " + std::to_string(id) + " cannot start a map: " + e.what();
+      return outcome;
+    }
+    if (!(std::isfinite(focal) && focal > 0.0)) {
+      outcome.refusal = "keyframe " + std::to_string(id) + " cannot start a map: focal length " +
+                        std::to_string(focal);
+      return outcome;
+    }
+    mapper_.emplace(params_, focal);
+    session_ = from.session;
+    outcome.new_map = true;
+  } else if (mapper_->map().hasKeyframe(id)) {
+    outcome.refusal = "keyframe " + std::to_string(id) + " is already in the map";
+    return outcome;
+  }
+  // Its version in this mapper's numbering; made before this mapper's first update: 0.
+  keyframe.map_version = from.mapper_id == mapper_id_ ? from.map_version : 0;
+  outcome.update = address(mapper_->addKeyframe(std::move(keyframe), &outcome.window_ba));
+  outcome.added = true;
+  return outcome;
+}
+
+MapperEndpoint::LoopOutcome MapperEndpoint::closeLoop(const Envelope& from,
+                                                      const loop::LoopConstraint& constraint) {
+  LoopOutcome outcome;
+  outcome.statistics.constraint = constraint;
+  if (!isCurrent(from.session)) {
+    outcome.stale = true;
+    outcome.statistics.reason =
+        "of tracker session " + std::to_string(from.session) +
+        (mapper_ ? ", the map is of session " + std::to_string(session_) : ", there is no map");
+    return outcome;
+  }
+  map::MapUpdate update = mapper_->closeLoop(constraint, &outcome.statistics);
+  if (outcome.statistics.applied) outcome.update = address(std::move(update));
+  return outcome;
+}
+
+void MapperEndpoint::reset(std::uint32_t new_mapper_id) {
+  mapper_.reset();
+  mapper_id_ = new_mapper_id;
+}
+
+std::vector<loop::PoseGraphEdge> MapperEndpoint::loopEdges() const {
+  return mapper_ ? mapper_->loopEdges() : std::vector<loop::PoseGraphEdge>{};
+}
+
+Addressed<map::MapUpdate> MapperEndpoint::address(map::MapUpdate update) const {
+  const Envelope from{session_, mapper_id_, update.map_version};
+  return {from, std::move(update)};
+}
+
+}  // namespace scale_drift_slam::system
