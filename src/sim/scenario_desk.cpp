@@ -2,7 +2,7 @@
 // (TUM RGB-D fr1/desk-like: 640x480, 30 Hz, fx ~517, its strong radial distortion). The desk top
 // (2.0 m x 1.5 m, z = 0, x in [-1, 1], y in [-0.6, 0.9]) is one textured plane: wood, papers,
 // notebooks, sticky notes, a keyboard, a mouse pad. On it stand a monitor on a foot, a stack of
-// books, a mug (a 16-sided cylinder) and a small box: about 15 % of the image is off the plane.
+// books, a mug (a 16-sided cylinder) and a small box: 16-27 % of the image is off the plane.
 // A wall stands behind the desk and a floor 0.75 m below it, seen only when the camera looks up.
 // The camera, 0.6 m above the desk and looking down ~47 degrees, is held still for the first
 // kStillSeconds (10 frames), then moves like a hand: it speeds up over 0.15 s to ~12 cm/s,
