@@ -8,7 +8,7 @@
 namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
-  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover"};
+  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover", "desk"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed) {
@@ -16,6 +16,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed) {
   if (name == "office_orbit") return detail::makeOfficeOrbit(seed);
   if (name == "corridor_straight") return detail::makeCorridorStraight(seed);
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
+  if (name == "desk") return detail::makeDesk(seed);
   std::string known;
   for (const std::string& n : scenarioNames())
     known += (known.empty() ? "" : ", ") + n;

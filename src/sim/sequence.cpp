@@ -38,8 +38,9 @@ void SequenceParams::validate() const {
   require(std::isfinite(horizontal_fov_deg) &&
               (horizontal_fov_deg == 0 || (horizontal_fov_deg >= 10 && horizontal_fov_deg <= 160)),
           "horizontal field of view must be in [10, 160] degrees");
-  require(distortion == "none" || distortion == "radtan" || distortion == "fisheye",
-          "distortion must be none, radtan or fisheye, not '" + distortion + "'");
+  require(distortion.empty() || distortion == "none" || distortion == "radtan" ||
+              distortion == "tum_fr1" || distortion == "fisheye",
+          "distortion must be none, radtan, tum_fr1 or fisheye, not '" + distortion + "'");
   require(max_frames >= 0, "the number of frames must be >= 0");
   require(std::isfinite(start_time) && start_time >= 0 && start_time < 4e9,
           "start time must be in [0, 4e9) s");
@@ -64,6 +65,9 @@ geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
     c.fx = c.fy = (params.width / 2.0) / std::tan(0.5 * fov * M_PI / 180.0);
     if (params.distortion == "radtan") {
       c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};  // EuRoC cam0
+    } else if (params.distortion == "tum_fr1") {
+      // TUM RGB-D freiburg1 (Kinect): strong radial terms of alternating sign, |k2| ~ 1.
+      c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
     } else {
       c.distortion = {0.0, 0.0, 0.0, 0.0, 0.0};
     }
@@ -75,6 +79,7 @@ geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
 SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(params) {
   params_.validate();
   scenario_ = makeScenario(params_.scene, params_.seed);
+  if (params_.distortion.empty()) params_.distortion = scenario_.distortion;
   camera_ = geometry::makeCameraModel(sequenceCalibration(params_, scenario_.horizontal_fov_deg));
   renderer_ = std::make_unique<Renderer>(*camera_);
   rate_ = params_.rate > 0 ? params_.rate : scenario_.rate;

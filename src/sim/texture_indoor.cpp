@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 
@@ -60,6 +61,89 @@ void radiator(cv::Mat& image, const cv::Rect& box) {
   for (int x = box.x; x < box.br().x; x += std::max(3, box.width / 24)) {
     cv::line(image, {x, box.y}, {x, box.br().y}, cv::Scalar(150), 1);
   }
+}
+
+/// Pastes `item` onto `image` centred at `centre`, turned by `angle_deg` (things lie askew on a
+/// desk; axis-aligned papers would give corners along only two directions).
+void pasteTurned(cv::Mat& image, const cv::Mat& item, cv::Point2f centre, double angle_deg) {
+  cv::Mat M =
+      cv::getRotationMatrix2D(cv::Point2f(item.cols / 2.0f, item.rows / 2.0f), angle_deg, 1.0);
+  M.at<double>(0, 2) += centre.x - item.cols / 2.0;
+  M.at<double>(1, 2) += centre.y - item.rows / 2.0;
+  // BORDER_TRANSPARENT leaves the desk where the item is not.
+  cv::warpAffine(item, image, M, image.size(), cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
+}
+
+/// A keyboard: a dark body with five rows of keys, each with a letter (repetitive structure).
+cv::Mat keyboard(double tpm, cv::RNG& rng) {
+  cv::Mat image(static_cast<int>(0.16 * tpm), static_cast<int>(0.45 * tpm), CV_8U,
+                cv::Scalar(rng.uniform(25, 55)));
+  const int rows = 5, cols = 15;
+  const double kw = (image.cols - 8.0) / cols, kh = (image.rows - 8.0) / rows;
+  const double key_grey = rng.uniform(150, 210);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const cv::Rect key(static_cast<int>(4 + c * kw + (r % 2) * kw / 3),
+                         static_cast<int>(4 + r * kh), static_cast<int>(kw - 3),
+                         static_cast<int>(kh - 3));
+      const cv::Rect clipped = key & cv::Rect(0, 0, image.cols, image.rows);
+      cv::rectangle(image, clipped, cv::Scalar(key_grey + rng.uniform(-8, 8)), cv::FILLED);
+      drawTextInBox(image, std::string(1, static_cast<char>('A' + rng.uniform(0, 26))),
+                    cv::Rect(clipped.x + clipped.width / 4, clipped.y + clipped.height / 4,
+                             clipped.width / 2, clipped.height / 2),
+                    40, cv::FONT_HERSHEY_SIMPLEX, 1);
+    }
+  }
+  return image;
+}
+
+/// A lined notebook page with handwriting, or a sticky note: bright paper with a few words.
+cv::Mat note(cv::Size size, bool lined, cv::RNG& rng) {
+  cv::Mat image(size, CV_8U, cv::Scalar(rng.uniform(205, 245)));
+  const int line_h = std::max(6, size.height / (lined ? 18 : 5));
+  for (int y = line_h; y < size.height - line_h / 2; y += line_h) {
+    if (lined) cv::line(image, {0, y}, {size.width, y}, cv::Scalar(150), 1);
+    if (rng.uniform(0, 3) > 0) {
+      drawTextInBox(image, randomWord(rng, 1, 3) + " " + randomWord(rng, 1, 2),
+                    cv::Rect(size.width / 10, y - line_h + 2,
+                             rng.uniform(size.width / 3, size.width * 4 / 5), line_h - 3),
+                    rng.uniform(10, 90), cv::FONT_HERSHEY_SCRIPT_SIMPLEX, 1);
+    }
+  }
+  cv::rectangle(image, cv::Rect(0, 0, size.width, size.height), cv::Scalar(120), 1);
+  return image;
+}
+
+/// Small things: pens, a coffee ring, a cable, a mouse on its pad.
+void deskClutter(cv::Mat& image, double tpm, cv::RNG& rng) {
+  for (int k = rng.uniform(3, 6); k > 0; --k) {  // pens and pencils
+    const cv::Point a(rng.uniform(0, image.cols), rng.uniform(0, image.rows));
+    const double angle = rng.uniform(0.0, M_PI), length = rng.uniform(0.12, 0.16) * tpm;
+    const cv::Point b(a.x + static_cast<int>(length * std::cos(angle)),
+                      a.y + static_cast<int>(length * std::sin(angle)));
+    cv::line(image, a, b, cv::Scalar(rng.uniform(0, 60)), std::max(2, int(0.008 * tpm)),
+             cv::LINE_AA);
+  }
+  const cv::Point ring(rng.uniform(0, image.cols), rng.uniform(0, image.rows));
+  cv::circle(image, ring, static_cast<int>(0.04 * tpm), cv::Scalar(rng.uniform(60, 100)), 2,
+             cv::LINE_AA);
+  std::vector<cv::Point> cable;
+  double x = rng.uniform(0, image.cols), y = 0, heading = M_PI / 2;
+  while (y < image.rows && x > 0 && x < image.cols) {
+    cable.emplace_back(static_cast<int>(x), static_cast<int>(y));
+    heading += rng.uniform(-0.3, 0.3);
+    x += 0.02 * tpm * std::cos(heading);
+    y += 0.02 * tpm * std::max(0.3, std::sin(heading));
+  }
+  cv::polylines(image, cable, false, cv::Scalar(20), std::max(2, int(0.006 * tpm)), cv::LINE_AA);
+  const cv::Rect pad(rng.uniform(image.cols / 2, image.cols * 3 / 4),
+                     rng.uniform(0, image.rows / 2), static_cast<int>(0.25 * tpm),
+                     static_cast<int>(0.2 * tpm));
+  cv::rectangle(image, pad & cv::Rect(0, 0, image.cols, image.rows),
+                cv::Scalar(rng.uniform(30, 70)), cv::FILLED);
+  cv::ellipse(image, cv::Point(pad.x + pad.width / 2, pad.y + pad.height / 2),
+              cv::Size(static_cast<int>(0.03 * tpm), static_cast<int>(0.05 * tpm)), 0, 0, 360,
+              cv::Scalar(200), cv::FILLED, cv::LINE_AA);
 }
 
 }  // namespace
@@ -227,6 +311,41 @@ cv::Mat furniture(const std::string& kind, double width_m, double height_m, doub
   } else {
     throw std::invalid_argument("unknown furniture '" + kind + "'");
   }
+  return image;
+}
+
+cv::Mat deskTop(double width_m, double depth_m, double texels_per_metre, std::uint32_t seed) {
+  cv::RNG rng(0xde50000ULL + seed);
+  const double tpm = texels_per_metre;
+  const cv::Size size(static_cast<int>(width_m * tpm), static_cast<int>(depth_m * tpm));
+  // Wood: grain stretched along x over broad light-dark bands (the veneer).
+  cv::Mat grain = fractalNoise(cv::Size(size.width / 16 + 1, size.height), 4.0, 3, 0.6, rng);
+  cv::Mat grain_wide;
+  cv::resize(grain, grain_wide, size);
+  cv::Mat wood =
+      18 * grain_wide + 14 * fractalNoise(size, 0.4 * tpm, 3, 0.5, rng) + rng.uniform(120.0, 165.0);
+  cv::Mat image;
+  wood.convertTo(image, CV_8U);
+  auto anywhere = [&](double margin_m) {
+    const int m = static_cast<int>(margin_m * tpm);
+    return cv::Point2f(rng.uniform(m, std::max(m + 1, size.width - m)),
+                       rng.uniform(m, std::max(m + 1, size.height - m)));
+  };
+  for (int k = rng.uniform(4, 7); k > 0; --k) {  // papers, some printed, some notebooks
+    const cv::Size a4(static_cast<int>(0.21 * tpm), static_cast<int>(0.297 * tpm));
+    const cv::Mat paper = rng.uniform(0, 3) == 0 ? note(a4, true, rng) : poster(a4, rng);
+    pasteTurned(image, paper, anywhere(0.1), rng.uniform(-40.0, 40.0));
+  }
+  for (int k = rng.uniform(3, 6); k > 0; --k) {  // sticky notes
+    const int side = static_cast<int>(0.076 * tpm);
+    pasteTurned(image, note(cv::Size(side, side), false, rng), anywhere(0.05),
+                rng.uniform(-25.0, 25.0));
+  }
+  pasteTurned(image, keyboard(tpm, rng),
+              cv::Point2f(size.width * rng.uniform(0.35f, 0.55f), size.height * 0.45f),
+              rng.uniform(-8.0, 8.0));
+  deskClutter(image, tpm, rng);
+  addNoise(image, 5, 0.01 * tpm, 2, rng);
   return image;
 }
 

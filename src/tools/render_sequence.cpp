@@ -18,7 +18,7 @@ namespace {
 const char* kUsage =
     "usage: render_sequence --scene NAME --out DIR [--bag FILE] [--seed N] [options]\n"
     "Renders a synthetic image sequence with exact ground truth (doc/sequences.md).\n"
-    "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover.\n"
+    "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk.\n"
     "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, "
     "TUM),\n"
     "DIR/camera.yaml; with --bag FILE also a rosbag (/camera/image_raw, /camera/camera_info,\n"
@@ -29,7 +29,8 @@ const char* kUsage =
     "  --fps HZ                 frame rate (default: the scene's, 30)\n"
     "  --width W --height H     image size (default 640 x 480)\n"
     "  --fov DEG                horizontal field of view (default: the scene's; fisheye 120)\n"
-    "  --distortion MODEL       none | radtan | fisheye (rendered through the lens model)\n"
+    "  --distortion MODEL       none | radtan | tum_fr1 | fisheye (rendered through the lens\n"
+    "                           model; default: the scene's, tum_fr1 for desk, else none)\n"
     "  --color                  bgr8 images instead of mono8\n"
     "  --noise SIGMA            Gaussian pixel noise in grey levels (default 0)\n"
     "  --exposure AMPLITUDE     brightness gain 1 + A sin(2 pi t / period) (default 0)\n"
@@ -57,7 +58,7 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   p.height = static_cast<int>(cl.integer("height", 480));
   p.horizontal_fov_deg = cl.number("fov", 0.0);
   if (cl.has("fov") && p.horizontal_fov_deg == 0) throw std::invalid_argument("--fov must be > 0");
-  p.distortion = cl.text("distortion", "none");
+  p.distortion = cl.text("distortion", "");
   p.color = cl.has("color");
   p.start_time = cl.number("start-time", 1000.0);
   p.realism.noise_sigma = cl.number("noise", 0.0);

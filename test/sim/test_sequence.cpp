@@ -1,6 +1,7 @@
 // Sequences: deterministic for a seed, the realism flags do what they say, the TUM folder holds
 // exactly the rendered frames, stamps and poses, and bad parameters are refused with a reason.
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -10,6 +11,7 @@
 
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
+#include "scale_drift_slam/sim/renderer.h"
 #include "scale_drift_slam/sim/sequence.h"
 #include "scale_drift_slam/sim/sequence_writer.h"
 
@@ -157,6 +159,36 @@ TEST(Sequence, TumFolderHoldsTheFramesStampsAndPoses) {
   EXPECT_EQ(loaded.distortion, renderer.calibration().distortion);
   EXPECT_DOUBLE_EQ(loaded.fx, renderer.calibration().fx);
   EXPECT_EQ(TumSequenceWriter::formatStamp(1000033333333LL), "1000.033333333");
+}
+
+TEST(Sequence, DeskIsMostlyOnePlaneSeenThroughTheTumLensStillForTenFrames) {
+  SequenceParams params;
+  params.scene = "desk";
+  SequenceRenderer sequence(params);
+  EXPECT_EQ(sequence.frameCount(), 300);
+  EXPECT_EQ(sequence.calibration().distortion.front(), 0.2624);  // the scene's lens by default
+  // Still for frames 0-10 (the motion starts right after frame 10), moving from frame 11.
+  const geometry::SE3 still = sequence.pose(0).T_world_cam;
+  EXPECT_LT((sequence.pose(10).T_world_cam.matrix() - still.matrix()).norm(), 1e-12);
+  EXPECT_GT((sequence.pose(11).T_world_cam.translation() - still.translation()).norm(), 1e-5);
+  // The desk top is surface 0; everything else (objects, wall, floor) is off the plane.
+  Renderer renderer(sequence.camera());
+  double sum = 0.0, least = 1.0, most = 0.0;
+  int count = 0;
+  for (int i = 0; i < sequence.frameCount(); i += 15, ++count) {
+    cv::Mat image;
+    renderer.render(sequence.scenario().scene, sequence.pose(i).T_world_cam.inverse(), image);
+    const double off =
+        1.0 - cv::countNonZero(renderer.surfaceIndex() == 0) / static_cast<double>(image.total());
+    sum += off;
+    least = std::min(least, off);
+    most = std::max(most, off);
+  }
+  std::printf("desk: off-plane share of the image %.1f %% on average, %.1f-%.1f %%\n",
+              100 * sum / count, 100 * least, 100 * most);
+  EXPECT_GT(sum / count, 0.08);
+  EXPECT_LT(sum / count, 0.25);
+  EXPECT_LT(most, 0.35);
 }
 
 TEST(Sequence, BadParametersAreRefusedWithAReason) {

@@ -21,11 +21,12 @@ struct Scenario {
   double duration = 0.0;             ///< Seconds covered by the trajectory.
   double rate = 30.0;                ///< Default frame rate (Hz).
   double horizontal_fov_deg = 80.0;  ///< Default horizontal field of view of the camera.
+  std::string distortion = "none";   ///< Default lens (SequenceParams::distortion).
   /// The camera pose in the world (camera -> world) at time t in [0, duration].
   std::function<geometry::SE3(double t)> T_world_cam;
 };
 
-/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover.
+/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk.
 std::vector<std::string> scenarioNames();
 /// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
 /// Throws std::invalid_argument naming the known scenes for an unknown name.

@@ -38,10 +38,12 @@ struct SequenceParams {
   int height = 480;
   double rate = 0.0;                ///< Frames per second; 0: the scenario's default.
   double horizontal_fov_deg = 0.0;  ///< 0: the scenario's default (120 for fisheye).
-  std::string distortion = "none";  ///< none, radtan (plumb_bob) or fisheye (equidistant).
-  int max_frames = 0;               ///< Render only the first frames (0: the whole trajectory).
-  bool color = false;               ///< bgr8 images instead of mono8.
-  double start_time = 1000.0;       ///< Stamp of the first frame, seconds.
+  /// none, radtan (plumb_bob, EuRoC-like), tum_fr1 (plumb_bob, strong radial, TUM RGB-D fr1's)
+  /// or fisheye (equidistant); empty: the scenario's lens (Scenario::distortion).
+  std::string distortion;
+  int max_frames = 0;          ///< Render only the first frames (0: the whole trajectory).
+  bool color = false;          ///< bgr8 images instead of mono8.
+  double start_time = 1000.0;  ///< Stamp of the first frame, seconds.
   RealismParams realism;
   void validate() const;  ///< Throws std::invalid_argument with the reason.
 };
@@ -90,7 +92,8 @@ class SequenceRenderer {
 
 /// The camera of a sequence: size, field of view and lens model as in SequenceParams (the
 /// focal length follows from the horizontal field of view as for an undistorted camera;
-/// radtan uses EuRoC-like coefficients, fisheye TUM-VI-like ones).
+/// radtan uses EuRoC-like coefficients, tum_fr1 TUM RGB-D fr1's, fisheye TUM-VI-like ones; an
+/// empty distortion is none).
 geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
                                                 double default_fov_deg);
 

@@ -49,6 +49,9 @@ cv::Mat floorMaterial(const std::string& kind, double width_m, double depth_m,
 /// "books" (shelves of book spines), "screen" (a monitor showing windows of text).
 cv::Mat furniture(const std::string& kind, double width_m, double height_m, double texels_per_metre,
                   std::uint32_t seed);
+/// A desk top (width_m x depth_m) seen from above: wood veneer with papers, notebooks and sticky
+/// notes lying askew, a keyboard, a mouse pad, pens, a cable and a coffee ring.
+cv::Mat deskTop(double width_m, double depth_m, double texels_per_metre, std::uint32_t seed);
 /// An equirectangular terrain map (width = 2 height) for a sphere: fields with crop rows,
 /// roads, villages, forests and lakes. Periodic in longitude.
 cv::Mat terrain(int height, std::uint32_t seed);
