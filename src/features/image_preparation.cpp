@@ -1,5 +1,6 @@
 #include "scale_drift_slam/features/image_preparation.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
@@ -120,6 +121,37 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
   cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
                               cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
   return pyramid;
+}
+
+double stretchContrast(cv::Mat* grey, double target_range, double max_gain) {
+  if (grey == nullptr || grey->empty() || grey->type() != CV_8UC1) {
+    throw std::invalid_argument("contrast stretch needs a non-empty 8-bit grey image");
+  }
+  if (!(target_range > 0.0 && target_range <= 255.0) || !(max_gain >= 1.0)) {
+    throw std::invalid_argument("contrast stretch needs target_range in (0, 255], max_gain >= 1");
+  }
+  int histogram[256] = {0};
+  for (int r = 0; r < grey->rows; ++r) {
+    const unsigned char* row = grey->ptr<unsigned char>(r);
+    for (int c = 0; c < grey->cols; ++c)
+      ++histogram[row[c]];
+  }
+  // The 1st and 99th percentiles: a few hot or dead pixels do not count as contrast.
+  const double total = static_cast<double>(grey->total());
+  double below = 0.0;
+  int low = 0, high = 255;
+  for (int v = 0; v < 256; ++v) {
+    below += histogram[v];
+    if (below <= 0.01 * total) low = v + 1;
+    if (below < 0.99 * total) high = v + 1;
+  }
+  const double range = std::max(0, high - low);
+  if (range <= 0.0 || range >= target_range) return 1.0;
+  const double gain = std::min(max_gain, target_range / range);
+  if (gain <= 1.0) return 1.0;
+  const double centre = 0.5 * (low + high);
+  grey->convertTo(*grey, CV_8U, gain, 127.5 - gain * centre);
+  return gain;
 }
 
 std::string frameProblem(const cv::Mat& grey, int expected_width, int expected_height,

@@ -35,6 +35,8 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
   std::vector<Field> f = {
       {"tracker", "pyramid_levels", &t.pyramid_levels},
       {"tracker", "min_contrast", &t.min_contrast},
+      {"tracker", "contrast_target_range", &t.contrast_target_range},
+      {"tracker", "max_contrast_gain", &t.max_contrast_gain},
       {"tracker", "good_inliers", &t.good_inliers},
       {"tracker", "min_inliers", &t.min_inliers},
       {"tracker", "local_recent_keyframes", &t.local_recent_keyframes},

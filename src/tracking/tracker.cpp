@@ -14,6 +14,12 @@ void TrackerParams::validate() const {
     throw std::invalid_argument("tracker.pyramid_levels must be in [1, 8]");
   }
   if (!(min_contrast >= 0.0)) throw std::invalid_argument("tracker.min_contrast must be >= 0");
+  if (!(contrast_target_range > 0.0 && contrast_target_range <= 255.0)) {
+    throw std::invalid_argument("tracker.contrast_target_range must be in (0, 255]");
+  }
+  if (!(max_contrast_gain >= 1.0)) {
+    throw std::invalid_argument("tracker.max_contrast_gain must be >= 1");
+  }
   if (min_inliers < 6) throw std::invalid_argument("tracker.min_inliers must be >= 6");
   if (good_inliers < min_inliers) {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
@@ -85,6 +91,9 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
     restartYoungLostMap(&result);
     return result;
   }
+  // Stretch a dark or washed-out frame before anything looks at it (doc/frontend.md, step 1);
+  // black and uniform frames stay as they are and are rejected below.
+  features::stretchContrast(&grey, params_.contrast_target_range, params_.max_contrast_gain);
   const std::string problem =
       features::frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {

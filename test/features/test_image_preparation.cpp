@@ -61,6 +61,33 @@ TEST(ImagePreparation, NamesUnusableFrames) {
   EXPECT_NE(frameProblem(cv::Mat(), 64, 48, 2.0), "");
 }
 
+TEST(ImagePreparation, StretchesADimFrameAndLeavesTheRest) {
+  const cv::Mat bright = test::texturedImage(240, 180, 4);
+  // The same scene at 1/8 and at 1/10 of the exposure: few grey levels, and a gain change
+  // between the two frames.
+  cv::Mat dim8, dim10;
+  bright.convertTo(dim8, CV_8U, 1.0 / 8.0, 2.0);
+  bright.convertTo(dim10, CV_8U, 1.0 / 10.0, 2.0);
+  cv::Scalar mean, before, after;
+  cv::meanStdDev(dim10, mean, before);
+  EXPECT_GT(stretchContrast(&dim8, 128.0, 4.0), 3.9);  // range ~27: capped at 4
+  EXPECT_GT(stretchContrast(&dim10, 128.0, 4.0), 3.9);
+  cv::meanStdDev(dim10, mean, after);
+  EXPECT_NEAR(after[0], 4.0 * before[0], 1.0);
+  EXPECT_NEAR(mean[0], 127.5, 15.0);  // moved to mid-grey: no clipping
+  // A well-exposed frame is untouched, so are black and uniform ones, which stay rejected.
+  cv::Mat copy = bright.clone();
+  EXPECT_EQ(stretchContrast(&copy, 128.0, 4.0), 1.0);
+  EXPECT_EQ(cv::norm(copy, bright, cv::NORM_INF), 0.0);
+  for (const int v : {0, 128, 255}) {
+    cv::Mat flat(48, 64, CV_8UC1, cv::Scalar(v));
+    EXPECT_EQ(stretchContrast(&flat, 128.0, 4.0), 1.0);
+    EXPECT_NE(frameProblem(flat, 64, 48, 3.0).find("texture"), std::string::npos) << v;
+  }
+  EXPECT_THROW(stretchContrast(&copy, 128.0, 0.5), std::invalid_argument);
+  EXPECT_THROW(stretchContrast(&copy, 0.0, 4.0), std::invalid_argument);
+}
+
 TEST(ImagePreparation, PyramidHalvesEachLevel) {
   const ImagePyramid pyramid = buildPyramid(test::texturedImage(640, 480, 3), 4);
   ASSERT_EQ(pyramid.numLevels(), 4);

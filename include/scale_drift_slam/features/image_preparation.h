@@ -42,6 +42,18 @@ struct ImagePyramid {
 /// or non-grey image.
 ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
 
+/// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
+/// percentiles is below `target_range`, the grey values are scaled by
+/// min(max_gain, target_range / range) about that range's centre, which is moved to mid-grey.
+/// Why: a dark or washed-out frame (a camera still adapting its exposure, a dim scene) holds
+/// the same structure as a well-exposed one at a fraction of the grey levels, and the corner
+/// detectors' thresholds are absolute; the cap keeps sensor noise (and fixed-pattern noise in
+/// saturated areas) from being blown up into texture. Frames with a wider range are unchanged,
+/// so are black and uniform ones (range 0: nothing to stretch). Returns the gain applied (1 when
+/// unchanged). Throws std::invalid_argument for a non-grey image, target_range outside (0, 255]
+/// or max_gain < 1.
+double stretchContrast(cv::Mat* grey, double target_range, double max_gain);
+
 /// Why a frame cannot be used, or "" when it can: empty, a size other than the calibration's,
 /// or (after grey conversion) without texture (the standard deviation of the grey values below
 /// `min_contrast`, e.g. a black or blank frame).

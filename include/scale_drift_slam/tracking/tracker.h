@@ -28,7 +28,11 @@ namespace scale_drift_slam::tracking {
 
 struct TrackerParams {
   int pyramid_levels = 4;
-  double min_contrast = 3.0;        ///< Frames with a smaller grey-level std are unusable.
+  double min_contrast = 3.0;  ///< Frames with a smaller grey-level std (after the
+                              ///< contrast stretch) are unusable.
+  /// Frames whose 1st-99th percentile grey range is below this are stretched towards it...
+  double contrast_target_range = 128.0;
+  double max_contrast_gain = 4.0;   ///< ...by at most this gain (1: never stretched).
   int good_inliers = 50;            ///< Inliers for "good" tracking (fewer: weak).
   int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
