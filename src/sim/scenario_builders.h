@@ -14,6 +14,11 @@ Scenario makeOfficeOrbit(std::uint32_t seed);
 Scenario makeCorridorStraight(std::uint32_t seed);
 Scenario makeSphereFlyover(std::uint32_t seed);
 Scenario makeDesk(std::uint32_t seed);
+Scenario makeOfficePan(std::uint32_t seed);
+
+/// The furnished 6 m x 5 m x 2.7 m room of office_orbit (walls, floor, ceiling, desk with a
+/// monitor, cabinets, shelves, boxes); returns the desk's base centre.
+Eigen::Vector3d addOfficeRoom(Scene& scene, std::uint32_t seed);
 
 /// An axis-aligned box (rotated by `yaw` about z) standing on z = base.z(): four textured sides
 /// and a textured top, all visible from outside only.

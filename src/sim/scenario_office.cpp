@@ -2,7 +2,7 @@
 // rotation). Room 6 m x 5 m x 2.7 m (x in [-3, 3], y in [-2.5, 2.5]); a desk with a monitor, a
 // keyboard and papers, cabinets, a bookshelf, boxes. The camera swings on an arc of about 1.7 m
 // radius around the desk (+-43 degrees, height 1.33-1.57 m), looking at it with hand shake.
-// 20 s, 600 frames at 30 Hz.
+// 20 s, 600 frames at 30 Hz. office_pan (scenario_office_pan.cpp) pans in the same room.
 
 #include <cmath>
 
@@ -11,14 +11,7 @@
 
 namespace scale_drift_slam::sim::detail {
 
-Scenario makeOfficeOrbit(std::uint32_t seed) {
-  Scenario scenario;
-  scenario.name = "office_orbit";
-  scenario.description = "hand-held camera swinging around a desk in a furnished 6 m x 5 m room";
-  scenario.duration = 20.0;
-  scenario.rate = 30.0;
-  scenario.horizontal_fov_deg = 65.0;  // like the TUM RGB-D Kinect
-  Scene& scene = scenario.scene;
+Eigen::Vector3d addOfficeRoom(Scene& scene, std::uint32_t seed) {
   scene.background().below = scene.background().zenith = scene.background().horizon = 40.0f;
   const double tpm = 200.0, height = 2.7;
   const std::uint32_t base = seed * 64;
@@ -60,6 +53,17 @@ Scenario makeOfficeOrbit(std::uint32_t seed) {
          textures::floorMaterial("carpet", 0.45, 0.5, tpm, base + 32),
          textures::floorMaterial("carpet", 0.45, 0.45, tpm, base + 33), 0.7f);
 
+  return desk;
+}
+
+Scenario makeOfficeOrbit(std::uint32_t seed) {
+  Scenario scenario;
+  scenario.name = "office_orbit";
+  scenario.description = "hand-held camera swinging around a desk in a furnished 6 m x 5 m room";
+  scenario.duration = 20.0;
+  scenario.rate = 30.0;
+  scenario.horizontal_fov_deg = 65.0;  // like the TUM RGB-D Kinect
+  const Eigen::Vector3d desk = addOfficeRoom(scenario.scene, seed);
   cv::RNG rng(seed + 1000);
   const Wobble shake_x(rng, 0.012, 1.5), shake_y(rng, 0.012, 1.7), shake_z(rng, 0.01, 1.3);
   const Wobble look_x(rng, 0.12, 0.2), look_y(rng, 0.1, 0.25), look_z(rng, 0.08, 0.3);

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Fast rotation (issue 16, item 5): office_pan pans 120 degrees back and forth at up to 150 deg/s
+# (5 deg, ~45 px of image motion per frame at 30 Hz), a person turning with the camera held in
+# front of them. From the first pose on, >= 95 % of the frames must be tracked and the ATE (after
+# Sim(3) alignment) stay under 1 % of the path; the peak rate is checked on the ground truth so
+# that the scene cannot quietly become easier. ~15 s.
+set -euo pipefail
+bin="${SDS_BIN_DIR:?}"
+work="${SDS_TEST_OUTPUT_DIR:?}/fast_rotation"
+rm -rf "$work"
+mkdir -p "$work"
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+"$bin/render_sequence" --scene office_pan --noise 1 --out "$work/pan" --quiet > "$work/render.log"
+"$bin/run_sequence" "$work/pan" --out "$work/run" --quiet > "$work/run.log" 2>&1 ||
+  { cat "$work/run.log"; fail "run_sequence on office_pan"; }
+"$bin/evaluate_trajectory" "$work/pan/groundtruth.txt" "$work/run/trajectory.txt" --json \
+  > "$work/evaluation.json"
+
+/usr/bin/python3 - "$work/pan/groundtruth.txt" "$work/run/frames.csv" "$work/evaluation.json" <<'PY'
+import csv, json, math, sys
+truth = [[float(v) for v in l.split()] for l in open(sys.argv[1])
+         if l.strip() and not l.startswith('#')]
+frames = list(csv.DictReader(open(sys.argv[2])))
+evaluation = json.load(open(sys.argv[3]))
+
+def angle_deg(a, b):  # rotation between two TUM poses (quaternions x y z w at 4:8)
+    dot = abs(sum(x * y for x, y in zip(a[4:8], b[4:8])))
+    return 2.0 * math.degrees(math.acos(min(1.0, dot)))
+
+rates = [angle_deg(a, b) / (b[0] - a[0]) for a, b in zip(truth, truth[1:])]
+print("office_pan: peak rotation rate %.0f deg/s" % max(rates))
+assert max(rates) >= 140.0, "the pan is slower than it should be: %.0f deg/s" % max(rates)
+posed = [int(f["frame"]) for f in frames if f["state"] in ("good", "weak")]
+assert posed, "never initialised; last message: %s" % frames[-1]["message"]
+after = frames[posed[0]:]
+tracked = sum(f["state"] in ("good", "weak") for f in after)
+print("first pose at frame %d; tracked %d of the %d frames from there (%.1f %%)"
+      % (posed[0], tracked, len(after), 100.0 * tracked / len(after)))
+assert tracked >= 0.95 * len(after), "only %d of %d tracked" % (tracked, len(after))
+ratio = evaluation["ate"]["rmse"] / evaluation["ground_truth_path_length"]
+print("ATE %.4f m = %.2f %% of the %.2f m path"
+      % (evaluation["ate"]["rmse"], 100 * ratio, evaluation["ground_truth_path_length"]))
+assert ratio < 0.01, ratio
+PY
+echo "fast rotation tool test passed"
