@@ -13,6 +13,8 @@ Scenario makeCourtyardLoop(std::uint32_t seed);
 Scenario makeOfficeOrbit(std::uint32_t seed);
 Scenario makeCorridorStraight(std::uint32_t seed);
 Scenario makeSphereFlyover(std::uint32_t seed);
+Scenario makeCityBlock(std::uint32_t seed);
+Scenario makeCityLoop(std::uint32_t seed);
 
 /// An axis-aligned box (rotated by `yaw` about z) standing on z = base.z(): four textured sides
 /// and a textured top, all visible from outside only.
