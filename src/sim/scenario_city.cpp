@@ -5,7 +5,7 @@
 // 1.6 m/s^2 braking and acceleration, and shakes a little (engine and road: height, pitch, roll).
 //
 // city_block: one loop clockwise round a 110 m x 75 m block (~320 m), started in the middle of
-// the west street, then on past the start (~15 % of the loop) so that the loop must be closed.
+// the west street, then on 37 m (11 % of the loop) past the start so that the loop must be closed.
 // city_loop: a 330 m x 160 m loop round six blocks, then a second, smaller loop that re-drives
 // the first loop's west and south streets in the same direction (~1.6 km in all).
 
