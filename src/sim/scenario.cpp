@@ -8,8 +8,8 @@
 namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
-  return {"courtyard_loop", "office_orbit", "corridor_straight",
-          "sphere_flyover", "desk",         "office_pan"};
+  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover",
+          "desk",           "office_pan",   "city_block",        "city_loop"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed) {
@@ -19,10 +19,18 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed) {
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
   if (name == "desk") return detail::makeDesk(seed);
   if (name == "office_pan") return detail::makeOfficePan(seed);
+  if (name == "city_block") return detail::makeCityBlock(seed);
+  if (name == "city_loop") return detail::makeCityLoop(seed);
   std::string known;
   for (const std::string& n : scenarioNames())
     known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("unknown scene '" + name + "' (known: " + known + ")");
+}
+
+Eigen::Vector2i defaultImageSize(const std::string& name) {
+  // The driving scenes have a KITTI-like camera; the others a VGA one.
+  if (name.rfind("city_", 0) == 0) return {1241, 376};
+  return {640, 480};
 }
 
 Eigen::Matrix3d lookRotation(const Eigen::Vector3d& forward, const Eigen::Vector3d& up,

@@ -18,7 +18,8 @@ namespace {
 const char* kUsage =
     "usage: render_sequence --scene NAME --out DIR [--bag FILE] [--seed N] [options]\n"
     "Renders a synthetic image sequence with exact ground truth (doc/sequences.md).\n"
-    "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk.\n"
+    "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, office_pan,\n"
+    "city_block, city_loop.\n"
     "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, "
     "TUM),\n"
     "DIR/camera.yaml; with --bag FILE also a rosbag (/camera/image_raw, /camera/camera_info,\n"
@@ -26,8 +27,8 @@ const char* kUsage =
     "Options:\n"
     "  --seed N                 textures and wobble (default 1); same seed, same images\n"
     "  --frames N               render only the first N frames (default: the whole trajectory)\n"
-    "  --fps HZ                 frame rate (default: the scene's, 30)\n"
-    "  --width W --height H     image size (default 640 x 480)\n"
+    "  --fps HZ                 frame rate (default: the scene's, 30; city_*: 10)\n"
+    "  --width W --height H     image size (default: the scene's, 640 x 480; city_*: 1241 x 376)\n"
     "  --fov DEG                horizontal field of view (default: the scene's; fisheye 120)\n"
     "  --distortion MODEL       none | radtan | tum_fr1 | fisheye (rendered through the lens\n"
     "                           model; default: the scene's, tum_fr1 for desk, else none)\n"
@@ -54,8 +55,9 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   const double fps = cl.number("fps", 0.0);
   if (cl.has("fps") && !(fps > 0)) throw std::invalid_argument("--fps must be > 0");
   p.rate = fps;
-  p.width = static_cast<int>(cl.integer("width", 640));
-  p.height = static_cast<int>(cl.integer("height", 480));
+  const Eigen::Vector2i size = sds::sim::defaultImageSize(p.scene);
+  p.width = static_cast<int>(cl.integer("width", size.x()));
+  p.height = static_cast<int>(cl.integer("height", size.y()));
   p.horizontal_fov_deg = cl.number("fov", 0.0);
   if (cl.has("fov") && p.horizontal_fov_deg == 0) throw std::invalid_argument("--fov must be > 0");
   p.distortion = cl.text("distortion", "");

@@ -1,5 +1,6 @@
-// Rendering speed: frames per second of the renderer alone (640x480, one core) per scene and lens
-// model, the scene build time, and a whole 600-frame sequence written as a TUM folder.
+// Rendering speed: frames per second of the renderer alone (one core) per scene at its default
+// image size (640x480; the city_* driving scenes 1241x376) and lens model, the scene build time,
+// and a whole 600-frame sequence written as a TUM folder.
 
 #include <chrono>
 #include <ctime>
@@ -24,6 +25,11 @@ int main(int argc, char** argv) {
     for (const std::string distortion : {"none", "radtan", "fisheye"}) {
       sds::sim::SequenceParams params;
       params.distortion = distortion;
+      const Eigen::Vector2i size = sds::sim::defaultImageSize(name);
+      params.width = size.x();
+      params.height = size.y();
+      const std::string label =
+          name + " " + std::to_string(size.x()) + "x" + std::to_string(size.y()) + " ";
       const auto camera = sds::geometry::makeCameraModel(
           sds::sim::sequenceCalibration(params, scenario->horizontal_fov_deg));
       sds::sim::Renderer renderer(*camera);
@@ -38,10 +44,10 @@ int main(int argc, char** argv) {
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const double cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
-      report.add(name + " 640x480 " + distortion + ": renderer, wall clock", frames / seconds,
-                 "fps", std::to_string(frames) + " frames spread over the trajectory");
-      report.add(name + " 640x480 " + distortion + ": renderer, CPU time", frames / cpu_seconds,
-                 "fps", "one thread; on a shared machine wall-clock fps is lower");
+      report.add(label + distortion + ": renderer, wall clock", frames / seconds, "fps",
+                 std::to_string(frames) + " frames spread over the trajectory");
+      report.add(label + distortion + ": renderer, CPU time", frames / cpu_seconds, "fps",
+                 "one thread; on a shared machine wall-clock fps is lower");
     }
   }
   const std::string out = std::filesystem::temp_directory_path() / "sds_bench_render";

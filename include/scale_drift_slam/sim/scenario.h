@@ -26,11 +26,16 @@ struct Scenario {
   std::function<geometry::SE3(double t)> T_world_cam;
 };
 
-/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk.
+/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, office_pan, city_block,
+/// city_loop.
 std::vector<std::string> scenarioNames();
 /// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
 /// Throws std::invalid_argument naming the known scenes for an unknown name.
 Scenario makeScenario(const std::string& name, std::uint32_t seed);
+
+/// The default image size (width, height) of a named scene, known without building it: 1241 x 376
+/// (KITTI-like) for the city_* driving scenes, 640 x 480 for the others.
+Eigen::Vector2i defaultImageSize(const std::string& name);
 
 /// The camera orientation (camera -> world) looking along `forward` with the image's up as close
 /// to `up` as possible, then rolled by `roll` radians about the viewing direction.

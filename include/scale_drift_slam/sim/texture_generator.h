@@ -38,6 +38,20 @@ cv::Mat checkerboard(int cols, int rows, int square);
 cv::Mat facade(double width_m, double height_m, double texels_per_metre, std::uint32_t seed);
 /// Outdoor ground: paving slabs, gravel and lawn patches, markings.
 cv::Mat pavedGround(double width_m, double depth_m, double texels_per_metre, std::uint32_t seed);
+/// A street of length_m x width_m (texture x along the street): worn asphalt with repairs and
+/// cracks, a dashed centre line, parking strips 2 m wide at both edges with bay ticks, lane arrows,
+/// and a zebra crossing with a stop line at the chosen ends.
+cv::Mat road(double length_m, double width_m, double texels_per_metre, std::uint32_t seed,
+             bool crossing_at_start, bool crossing_at_end);
+/// Unmarked asphalt (the middle of a crossing).
+cv::Mat asphalt(double width_m, double depth_m, double texels_per_metre, std::uint32_t seed);
+/// The face of a kerb: 1 m stones with joints.
+cv::Mat kerbStones(double length_m, double height_m, double texels_per_metre, std::uint32_t seed);
+/// The side of a parked car: paint, windows with reflections, door seams, wheels.
+cv::Mat carBody(double length_m, double height_m, double texels_per_metre, std::uint32_t seed);
+/// Street furniture: "foliage" (tree crowns), "bark" (trunks), "metal" (painted poles).
+cv::Mat streetMaterial(const std::string& kind, double width_m, double height_m,
+                       double texels_per_metre, std::uint32_t seed);
 /// An interior wall (width_m x height_m): paint, posters, a whiteboard, framed pictures, a door,
 /// a radiator and a bookshelf, chosen and placed by the seed.
 cv::Mat interiorWall(double width_m, double height_m, double texels_per_metre, std::uint32_t seed,

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# PENDING (not picked up by ctest's test_*.sh glob): city_block end to end with run_sequence.
+# Renders the forward-driving city_block (KITTI-like 1241x376 camera at 10 Hz, ~370 m round one
+# block and on past the start, noise 1), runs the SLAM with the mapper and the loop closer inline
+# (deterministic) and asserts what issue 18 asks of it: >= 95 % of the frames tracked, the loop
+# closed at a true revisit with the scale drift the map really had (loop_checks.py), and the
+# corrected trajectory within 0.5 % of the path (ATE after Sim(3) alignment).
+# It fails on the current code: with seed 1 tracking is lost in the fourth turn (frames 390-438,
+# 89.5 % tracked) and is relocalised only after the turn (doc/sequences.md, "city_block"). Rename
+# it to test_city_block.sh when the turn fix of issue 16 makes it pass. ~40 s.
+set -euo pipefail
+bin="${SDS_BIN_DIR:?}"
+checks="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/loop_checks.py"
+work="${SDS_TEST_OUTPUT_DIR:?}/city_block"
+seed="${SDS_CITY_SEED:-1}"
+rm -rf "$work"
+mkdir -p "$work"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+printf "system:\n  mapping_thread: false\n" > "$work/inline.yaml"
+
+"$bin/render_sequence" --scene city_block --noise 1 --seed "$seed" --out "$work/seq" --quiet
+"$bin/run_sequence" "$work/seq" --out "$work/out" --config "$work/inline.yaml" --quiet \
+  > "$work/run.log" 2>&1 || { tail -20 "$work/run.log"; fail "run_sequence"; }
+grep -E "^frames|^loops" "$work/run.log"
+
+/usr/bin/python3 - "$work/out/summary.json" <<'PY' || fail "tracking or loop"
+import json, sys
+s = json.load(open(sys.argv[1]))
+print("tracked %d of %d frames (%.1f %%), %d loop(s) closed"
+      % (s["tracked"], s["frames"], 100.0 * s["tracked"] / s["frames"], len(s["loops"])))
+assert s["tracked"] >= 0.95 * s["frames"], "fewer than 95 % of the frames tracked"
+assert len(s["loops"]) >= 1, "the loop was not closed"
+PY
+/usr/bin/python3 "$checks" loops "$work/out/summary.json" "$work/seq/groundtruth.txt"
+/usr/bin/python3 "$checks" scale "$work/out/summary.json" "$work/seq/groundtruth.txt" \
+  "$work/out/trajectory_as_tracked.txt"
+"$bin/evaluate_trajectory" "$work/seq/groundtruth.txt" "$work/out/trajectory.txt" --json \
+  > "$work/evaluation.json"
+/usr/bin/python3 - "$work/evaluation.json" <<'PY' || fail "ATE bound"
+import json, sys
+e = json.load(open(sys.argv[1]))
+ratio = e["ate"]["rmse"] / e["ground_truth_path_length"]
+print("ATE %.3f m = %.3f %% of the %.1f m path" % (e["ate"]["rmse"], 100 * ratio,
+                                                  e["ground_truth_path_length"]))
+assert ratio <= 0.005, ratio
+PY
+echo "PASS"
