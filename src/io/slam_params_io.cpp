@@ -74,6 +74,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"flow", "max_forward_backward_px", &t.motion_prior.flow.max_forward_backward_px},
       {"flow", "dis_preset", &t.motion_prior.flow.dis_preset},
       {"motion_prior", "flow_sigma_px", &t.motion_prior.flow_sigma_px},
+      {"motion_prior", "predict_flow", &t.motion_prior.predict_flow},
       {"motion_prior", "min_tracks", &t.motion_prior.min_tracks},
       {"motion_prior", "max_tracks", &t.motion_prior.max_tracks},
       {"motion_prior", "min_rotation_sigma", &t.motion_prior.min_rotation_sigma},

@@ -163,18 +163,23 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
 std::ofstream openFrameLog(const fs::path& path) {
   std::ofstream file(path);
   if (!file) throw std::runtime_error("cannot write '" + path.string() + "'");
-  file << "frame,timestamp,state,rejected,visible,found,inliers,keyframes,relocalised,message\n";
+  file << "frame,timestamp,state,rejected,visible,found,inliers,keyframes,new_points,candidates,"
+          "relocalised,message\n";
   return file;
 }
 
+/// `candidates`: feature candidates alive after the frame (tracking::Tracker::numCandidates).
 void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameResult& r,
-              std::ofstream* file) {
+              std::size_t candidates, std::ofstream* file) {
   std::string message = r.message;
   std::replace(message.begin(), message.end(), '"', '\'');
+  std::size_t new_points = 0;
+  for (const map::KeyframeMessage& keyframe : r.keyframes)
+    new_points += keyframe.new_points.size();
   *file << index << ',' << std::fixed << std::setprecision(6) << frame.timestamp << ','
         << trackingStateName(r.state) << ',' << r.rejected << ',' << r.num_visible << ','
-        << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ',' << r.relocalised
-        << ",\"" << message << "\"\n";
+        << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ',' << new_points
+        << ',' << candidates << ',' << r.relocalised << ",\"" << message << "\"\n";
 }
 
 int run(const io::CommandLine& args) {
@@ -232,7 +237,7 @@ int run(const io::CommandLine& args) {
       if (r.state != tracking::TrackingState::kInitializing) timings.add("frame", frame_ms);
     }
     if (r.has_pose) trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
-    logFrame(frames - 1, *frame, r, &frame_log);
+    logFrame(frames - 1, *frame, r, slam.tracker().numCandidates(), &frame_log);
     for (const std::string& line : slam.takeLog())
       std::cout << (progress ? "\n" : "") << line << "\n";
     if (progress && (frames % 10 == 0 || frames == static_cast<int>(total))) {

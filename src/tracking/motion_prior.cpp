@@ -22,6 +22,37 @@ void MotionPriorParams::validate() const {
 
 namespace {
 
+/// Where the constant-velocity motion moves a point: its pixel in the current camera, or the
+/// pixel itself when that is not in the image.
+cv::Point2f moved(const Eigen::Vector3d& p_cur, const cv::Point2f& px,
+                  const geometry::CameraModel& camera) {
+  const std::optional<Eigen::Vector2d> pixel = camera.project(p_cur);
+  if (!pixel || !camera.isInImage(*pixel)) return px;
+  return cv::Point2f(static_cast<float>(pixel->x()), static_cast<float>(pixel->y()));
+}
+
+/// Where the flow starts (MotionPriorParams::predict_flow): the map points through their
+/// position in the guessed camera, the other points (candidates, depth unknown here) at the
+/// scene depth in the previous camera, moved by the guessed motion.
+std::vector<cv::Point2f> predictedPixels(const std::vector<FlowSeed>& seeds,
+                                         const std::vector<cv::Point2f>& extra_px,
+                                         const geometry::SE3& T_guess,
+                                         const geometry::SE3& T_previous, double scene_depth,
+                                         const geometry::CameraModel& camera) {
+  std::vector<cv::Point2f> start;
+  start.reserve(seeds.size() + extra_px.size());
+  for (const FlowSeed& seed : seeds)
+    start.push_back(moved(T_guess * seed.p_world, seed.px, camera));
+  const geometry::SE3 T_cur_previous = T_guess * T_previous.inverse();
+  const double depth = scene_depth > 0.0 ? scene_depth : 1.0;
+  for (const cv::Point2f& px : extra_px) {
+    const Eigen::Vector3d ray = camera.unproject(Eigen::Vector2d(px.x, px.y));
+    start.push_back(ray.z() > 0.0 ? moved(T_cur_previous * (ray * (depth / ray.z())), px, camera)
+                                  : px);
+  }
+  return start;
+}
+
 Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
   Eigen::Matrix<double, 6, 1> d;
   d << Eigen::Vector3d::Constant(rotation * rotation),
@@ -48,8 +79,9 @@ MotionPrior MotionPriorEstimator::fallback(const geometry::SE3& T_guess, double 
 MotionPrior MotionPriorEstimator::estimate(
     const features::ImagePyramid& previous, const features::ImagePyramid& current,
     const std::vector<FlowSeed>& seeds, const std::vector<cv::Point2f>& extra_px,
-    const geometry::SE3& T_guess, double scene_depth, const geometry::CameraModel& camera,
-    std::vector<cv::Point2f>* extra_tracked, std::vector<unsigned char>* extra_ok) {
+    const geometry::SE3& T_guess, const geometry::SE3& T_previous, double scene_depth,
+    const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
+    std::vector<unsigned char>* extra_ok) {
   // An even subset of the seeds is plenty for six pose parameters and bounds the flow's cost.
   std::vector<FlowSeed> picked;
   const std::size_t n = std::min<std::size_t>(seeds.size(), params_.max_tracks);
@@ -62,7 +94,13 @@ MotionPrior MotionPriorEstimator::estimate(
   from.insert(from.end(), extra_px.begin(), extra_px.end());
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
-  flow_.track(previous, current, from, &to, &ok);
+  if (params_.predict_flow) {
+    const std::vector<cv::Point2f> start =
+        predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera);
+    flow_.track(previous, current, from, &to, &ok, &start);
+  } else {
+    flow_.track(previous, current, from, &to, &ok);
+  }
   extra_tracked->assign(to.begin() + picked.size(), to.end());
   extra_ok->assign(ok.begin() + picked.size(), ok.end());
 

@@ -35,7 +35,11 @@ OpticalFlow::OpticalFlow(const OpticalFlowParams& params) : params_(params) {
 
 void OpticalFlow::track(const features::ImagePyramid& previous,
                         const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
-                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) {
+                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok,
+                        const std::vector<cv::Point2f>* start) {
+  if (start && start->size() != from.size()) {
+    throw std::invalid_argument("optical flow: start positions do not match the points");
+  }
   to->assign(from.size(), cv::Point2f(0.f, 0.f));
   ok->assign(from.size(), 0);
   if (from.empty() || previous.levels.empty() || current.levels.empty()) return;
@@ -43,7 +47,7 @@ void OpticalFlow::track(const features::ImagePyramid& previous,
   if (params_.method == FlowMethod::kDis) {
     trackDis(previous, current, from, to, ok);
   } else {
-    trackLucasKanade(previous, current, from, to, ok);
+    trackLucasKanade(previous, current, from, start, to, ok);
   }
   const cv::Size size = current.base().size();
   for (std::size_t i = 0; i < from.size(); ++i) {
@@ -57,24 +61,58 @@ void OpticalFlow::track(const features::ImagePyramid& previous,
 void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
                                    const features::ImagePyramid& current,
                                    const std::vector<cv::Point2f>& from,
+                                   const std::vector<cv::Point2f>* start,
                                    std::vector<cv::Point2f>* to,
                                    std::vector<unsigned char>* ok) const {
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
   const std::vector<cv::Mat> prev_levels(previous.levels.begin(), previous.levels.begin() + levels);
   const std::vector<cv::Mat> cur_levels(current.levels.begin(), current.levels.begin() + levels);
+  if (start) *to = *start;
+  lucasKanadePass(prev_levels, cur_levels, from, start != nullptr, to, ok);
+  if (start) {
+    // A prediction can be wrong (the motion changed): where it moved a point and the flow
+    // failed from there, try again from the point itself.
+    std::vector<std::size_t> retry;
+    std::vector<cv::Point2f> retry_from;
+    for (std::size_t i = 0; i < from.size(); ++i) {
+      const cv::Point2f moved = (*start)[i] - from[i];
+      if (!(*ok)[i] && moved.dot(moved) > 1.0f) {
+        retry.push_back(i);
+        retry_from.push_back(from[i]);
+      }
+    }
+    if (!retry.empty()) {
+      std::vector<cv::Point2f> retry_to;
+      std::vector<unsigned char> retry_ok;
+      lucasKanadePass(prev_levels, cur_levels, retry_from, false, &retry_to, &retry_ok);
+      for (std::size_t k = 0; k < retry.size(); ++k) {
+        (*to)[retry[k]] = retry_to[k];
+        (*ok)[retry[k]] = retry_ok[k];
+      }
+    }
+  }
+}
+
+void OpticalFlow::lucasKanadePass(const std::vector<cv::Mat>& previous,
+                                  const std::vector<cv::Mat>& current,
+                                  const std::vector<cv::Point2f>& from, bool from_start,
+                                  std::vector<cv::Point2f>* to,
+                                  std::vector<unsigned char>* ok) const {
+  if (from.empty()) return;
+  const int max_level = static_cast<int>(previous.size()) - 1;
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
                                   params_.max_iterations, 0.01);
   const cv::Size window(params_.window, params_.window);
   std::vector<float> error;
-  cv::calcOpticalFlowPyrLK(prev_levels, cur_levels, from, *to, *ok, error, window, levels - 1,
-                           criteria);
+  cv::calcOpticalFlowPyrLK(previous, current, from, *to, *ok, error, window, max_level, criteria,
+                           from_start ? cv::OPTFLOW_USE_INITIAL_FLOW : 0);
   for (std::size_t i = 0; i < from.size(); ++i) {
     if (error[i] > params_.max_error) (*ok)[i] = 0;
   }
   if (params_.max_forward_backward_px <= 0.0) return;
   std::vector<cv::Point2f> back = from;
   std::vector<unsigned char> back_ok;
-  cv::calcOpticalFlowPyrLK(cur_levels, prev_levels, *to, back, back_ok, error, window, levels - 1,
+  cv::calcOpticalFlowPyrLK(current, previous, *to, back, back_ok, error, window, max_level,
                            criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
   const double max_sq = params_.max_forward_backward_px * params_.max_forward_backward_px;
   for (std::size_t i = 0; i < from.size(); ++i) {

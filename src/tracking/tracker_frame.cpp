@@ -79,7 +79,8 @@ MotionPrior Tracker::estimatePrior(const features::ImagePyramid& image,
     }
   }
   return motion_prior_.estimate(previous_image_, image, seeds, candidates_.pixels(), T_guess,
-                                last_scene_depth_, *camera_, candidate_px, candidate_ok);
+                                T_previous_world_, last_scene_depth_, *camera_, candidate_px,
+                                candidate_ok);
 }
 
 std::vector<features::SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,

@@ -111,8 +111,9 @@ TEST(MotionPrior, FlowRecoversTheMotion) {
   std::vector<cv::Point2f> extra_tracked;
   std::vector<unsigned char> extra_ok;
   const geometry::SE3 guess = pose(1);  // two frames behind
-  const MotionPrior prior = estimator.estimate(previous, current, seeds, {cv::Point2f(300, 200)},
-                                               guess, kWallDepth, *cam, &extra_tracked, &extra_ok);
+  const MotionPrior prior =
+      estimator.estimate(previous, current, seeds, {cv::Point2f(300, 200)}, guess, pose(0),
+                         kWallDepth, *cam, &extra_tracked, &extra_ok);
   ASSERT_TRUE(prior.from_flow);
   EXPECT_GT(prior.num_tracks, 100);
   ASSERT_EQ(extra_tracked.size(), 1u);
@@ -123,8 +124,8 @@ TEST(MotionPrior, FlowRecoversTheMotion) {
   // The truth lies inside the prior's uncertainty (chi2 with 6 dof, 99.9%: 22.5).
   EXPECT_LT(error.dot(prior.Sigma.inverse() * error), 22.5);
 
-  const MotionPrior fallback = estimator.estimate(previous, current, {}, {}, guess, kWallDepth,
-                                                  *cam, &extra_tracked, &extra_ok);
+  const MotionPrior fallback = estimator.estimate(previous, current, {}, {}, guess, pose(0),
+                                                  kWallDepth, *cam, &extra_tracked, &extra_ok);
   EXPECT_FALSE(fallback.from_flow);
   EXPECT_LT((fallback.T_cur_world.translation() - guess.translation()).norm(), 1e-12);
   EXPECT_GT(fallback.Sigma(3, 3), 100 * prior.Sigma(3, 3));

@@ -3,10 +3,14 @@
 // flow through rendered views of a textured room, then the pose at the last frame. The carried
 // pixels lie where the true pose projects the points, and the pose is the true one.
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <random>
 
 #include <gtest/gtest.h>
 
+#include "scale_drift_slam/features/feature_detection.h"
 #include "scale_drift_slam/geometry/so3.h"
 #include "scale_drift_slam/tracking/motion_prior.h"
 #include "synthetic_images.h"
@@ -60,6 +64,75 @@ TEST(MotionPrior, CarriesPointsThroughFramesToTheTruePose) {
   EXPECT_EQ(same->px.size(), seeds.size());
   const std::vector<FlowSeed> few(seeds.begin(), seeds.begin() + 5);
   EXPECT_FALSE(estimator.carry(frames, few, fastPose(0).inverse(), *camera).has_value());
+}
+
+/// Frame k of a fast steady pan in boxRoom(4, 2, 4): `deg` degrees of yaw and 2 cm of sideways
+/// motion per frame (a person turning with the camera in front of them), T_world_cam.
+geometry::SE3 panPose(int k, double deg) {
+  return geometry::SE3(geometry::expSO3(Eigen::Vector3d(0.0, deg * M_PI / 180.0 * k, 0.0)),
+                       Eigen::Vector3d(0.02 * k, 0.0, -0.5));
+}
+
+/// The prior for frame 2 of the pan from frame 1, with the constant-velocity guess.
+MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* candidate_ok) {
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto camera = test::pinholeCamera(450.0);
+  const auto render = [&](int k) {
+    return features::buildPyramid(
+        test::renderPlanes(room, camera->K(), panPose(k, deg).inverse(), 640, 480), 4, 15);
+  };
+  const features::ImagePyramid previous = render(1), current = render(2);
+  std::vector<FlowSeed> seeds;
+  std::vector<cv::Point2f> candidates;
+  for (const cv::KeyPoint& k : features::detectSpreadCorners(previous.base(), 300, {})) {
+    const Eigen::Vector2d px(k.pt.x, k.pt.y);
+    const Eigen::Vector3d ray = camera->unproject(px);
+    // The ray's point on the room's walls: march along it until it leaves the box.
+    const geometry::SE3 T_world_cam = panPose(1, deg);
+    double depth = 0.05;
+    while (depth < 10.0) {
+      const Eigen::Vector3d p = T_world_cam * (ray * depth);
+      if (std::abs(p.x()) > 2.0 || std::abs(p.y()) > 1.0 || std::abs(p.z()) > 2.0) break;
+      depth += 0.005;
+    }
+    const Eigen::Vector3d p_world = T_world_cam * (ray * depth);
+    if (seeds.size() < 150) {
+      seeds.push_back({k.pt, p_world});
+    } else {
+      candidates.push_back(k.pt);
+    }
+  }
+  MotionPriorParams params;
+  params.predict_flow = predict_flow;
+  MotionPriorEstimator estimator(params, features::MotionOnlyBundleAdjustmentParams{});
+  const geometry::SE3 T_previous = panPose(1, deg).inverse();
+  const geometry::SE3 T_guess = T_previous * panPose(0, deg) * T_previous;  // constant velocity
+  std::vector<cv::Point2f> candidate_px;
+  return estimator.estimate(previous, current, seeds, candidates, T_guess, T_previous, 2.0, *camera,
+                            &candidate_px, candidate_ok);
+}
+
+TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
+  // 10 degrees per frame: ~80 px of image motion, beyond what Lucas-Kanade's pyramid reaches
+  // from the points themselves; from where the steady motion moves them it is a small step.
+  const double deg = 10.0;
+  std::vector<unsigned char> predicted_ok, plain_ok;
+  const MotionPrior predicted = panPrior(deg, true, &predicted_ok);
+  const MotionPrior plain = panPrior(deg, false, &plain_ok);
+  const geometry::SE3 T_true = panPose(2, deg).inverse();
+  ASSERT_TRUE(predicted.from_flow);
+  EXPECT_GT(predicted.num_tracks, 100);
+  EXPECT_LT((predicted.T_cur_world * T_true.inverse()).log().head<3>().norm(), 0.003);
+  const auto count = [](const std::vector<unsigned char>& ok) {
+    return std::count(ok.begin(), ok.end(), 1);
+  };
+  EXPECT_GT(count(predicted_ok), 0.8 * predicted_ok.size());  // the candidates follow too
+  std::printf(
+      "predicted: %d tracks, %ld of %zu candidates; from the points: %d tracks (%s), "
+      "%ld candidates\n",
+      predicted.num_tracks, count(predicted_ok), predicted_ok.size(), plain.num_tracks,
+      plain.from_flow ? "flow" : "fallback", count(plain_ok));
+  EXPECT_LT(plain.num_tracks, predicted.num_tracks / 2);
 }
 
 }  // namespace

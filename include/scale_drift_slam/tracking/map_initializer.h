@@ -24,13 +24,13 @@ namespace scale_drift_slam::tracking {
 
 struct InitializerParams {
   TwoViewParams two_view;
-  int num_features = 500;          ///< Corners tracked from the reference frame.
-  int min_tracks = 80;             ///< Below this many surviving tracks, start again.
+  int num_features = 500;  ///< Corners tracked from the reference frame.
+  int min_tracks = 80;     ///< Below this many surviving tracks, start again.
   /// Median corner motion before a reconstruction is tried: only skips a camera that has not
   /// moved beyond tracking jitter. Not a parallax test (the two-view's is): a hand-held camera
   /// turning towards what it looks at moves the corners little while the baseline grows.
   double min_disparity_px = 5.0;
-  int max_frames = 60;             ///< Replace the reference after this many frames.
+  int max_frames = 60;  ///< Replace the reference after this many frames.
   void validate() const;
 };
 

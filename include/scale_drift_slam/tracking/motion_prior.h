@@ -29,6 +29,10 @@ struct MotionPriorParams {
   double min_translation_sigma = 0.005;     ///< Floor of Sigma_Delta (fraction of the scene depth).
   double fallback_rotation_sigma = 0.05;    ///< Sigma_Delta of the fallback (radians).
   double fallback_translation_sigma = 0.1;  ///< ...(fraction of the scene depth).
+  /// Start the flow of each point where the constant-velocity motion moves it (map points through
+  /// their position, candidates at the scene depth), not where it was: a fast but steady turn
+  /// moves the image by more than Lucas-Kanade's pyramid reaches from zero.
+  bool predict_flow = true;
   void validate() const;
 };
 
@@ -52,12 +56,13 @@ class MotionPriorEstimator {
 
   /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
   /// `extra_tracked` / `extra_ok`) from `previous` into `current` in one flow call and estimates
-  /// the prior. `T_guess` is the constant-velocity guess, `scene_depth` scales the floors.
+  /// the prior. `T_guess` is the constant-velocity guess of the current pose, `T_previous` the
+  /// previous frame's pose; `scene_depth` scales the floors.
   MotionPrior estimate(const features::ImagePyramid& previous,
                        const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
                        const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
-                       double scene_depth, const geometry::CameraModel& camera,
-                       std::vector<cv::Point2f>* extra_tracked,
+                       const geometry::SE3& T_previous, double scene_depth,
+                       const geometry::CameraModel& camera, std::vector<cv::Point2f>* extra_tracked,
                        std::vector<unsigned char>* extra_ok);
 
   /// The fallback: the guess with the wide uncertainty.

@@ -40,16 +40,23 @@ class OpticalFlow {
 
   /// Moves `from` (pixels in `previous`) into `current`; `ok[i]` says whether point i was
   /// tracked (inside the image, converged, consistent). Outputs have the size of `from`.
+  /// `start`, when given (same size), is where Lucas-Kanade starts each point instead of at
+  /// `from` (a predicted position); a point that fails from there is tried again from `from`.
   void track(const features::ImagePyramid& previous, const features::ImagePyramid& current,
              const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
-             std::vector<unsigned char>* ok);
+             std::vector<unsigned char>* ok, const std::vector<cv::Point2f>* start = nullptr);
 
   const OpticalFlowParams& params() const { return params_; }
 
  private:
   void trackLucasKanade(const features::ImagePyramid& previous,
                         const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
-                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
+                        const std::vector<cv::Point2f>* start, std::vector<cv::Point2f>* to,
+                        std::vector<unsigned char>* ok) const;
+  /// One Lucas-Kanade pass; `to` holds the start positions when `from_start` is set.
+  void lucasKanadePass(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
+                       const std::vector<cv::Point2f>& from, bool from_start,
+                       std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
   void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
                 std::vector<unsigned char>* ok);

@@ -1,13 +1,12 @@
 #!/usr/bin/env bash
-# PENDING (not picked up by ctest's test_*.sh glob): city_block end to end with run_sequence.
+# city_block end to end with run_sequence (issue 18; the turn fix of issue 16).
 # Renders the forward-driving city_block (KITTI-like 1241x376 camera at 10 Hz, ~370 m round one
 # block and on past the start, noise 1), runs the SLAM with the mapper and the loop closer inline
 # (deterministic) and asserts what issue 18 asks of it: >= 95 % of the frames tracked, the loop
 # closed at a true revisit with the scale drift the map really had (loop_checks.py), and the
 # corrected trajectory within 0.5 % of the path (ATE after Sim(3) alignment).
-# It fails on the current code: with seed 1 tracking is lost in the fourth turn (frames 390-438,
-# 89.5 % tracked) and is relocalised only after the turn (doc/sequences.md, "city_block"). Rename
-# it to test_city_block.sh when the turn fix of issue 16 makes it pass. ~40 s.
+# Before the flow started at the predicted positions (motion_prior.predict_flow) tracking was lost
+# in the fourth turn with seed 1 (frames 390-438, 89.5 % tracked; doc/frontend.md). ~15 s.
 set -euo pipefail
 bin="${SDS_BIN_DIR:?}"
 checks="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/loop_checks.py"
