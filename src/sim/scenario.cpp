@@ -8,7 +8,8 @@
 namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
-  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover", "desk"};
+  return {"courtyard_loop", "office_orbit", "corridor_straight",
+          "sphere_flyover", "desk",         "facade_grid"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed) {
@@ -17,6 +18,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed) {
   if (name == "corridor_straight") return detail::makeCorridorStraight(seed);
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
   if (name == "desk") return detail::makeDesk(seed);
+  if (name == "facade_grid") return detail::makeFacadeGrid(seed);
   std::string known;
   for (const std::string& n : scenarioNames())
     known += (known.empty() ? "" : ", ") + n;

@@ -14,6 +14,7 @@ Scenario makeOfficeOrbit(std::uint32_t seed);
 Scenario makeCorridorStraight(std::uint32_t seed);
 Scenario makeSphereFlyover(std::uint32_t seed);
 Scenario makeDesk(std::uint32_t seed);
+Scenario makeFacadeGrid(std::uint32_t seed);
 
 /// An axis-aligned box (rotated by `yaw` about z) standing on z = base.z(): four textured sides
 /// and a textured top, all visible from outside only.

@@ -26,7 +26,7 @@ struct Scenario {
   std::function<geometry::SE3(double t)> T_world_cam;
 };
 
-/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk.
+/// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, facade_grid.
 std::vector<std::string> scenarioNames();
 /// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
 /// Throws std::invalid_argument naming the known scenes for an unknown name.
