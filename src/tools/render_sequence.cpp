@@ -40,18 +40,18 @@ const char* kUsage =
     "  --blur-samples N         renders averaged over the shutter (default 6)\n"
     "  --optics-blur SIGMA      lens softness, Gaussian sigma in pixels (default 0.5)\n"
     "  --blackout START:LENGTH  black frames from START for LENGTH seconds\n"
+    "  --start-time S           stamp of the first frame (default 1000 s)\n"
+    "  --quiet                  no progress output\n"
     "Camera effects (doc/sequences.md):\n"
     "  --rolling-shutter S      readout time top to bottom row (default 0: global shutter);\n"
     "                           each row at its own pose, the ground truth at the middle row's\n"
-    "  --rolling-shutter-bands N  rows rendered per pose in N bands (default 0: every row)\n"
+    "  --rolling-shutter-bands N  N bands of rows, one pose each (default 0: every row)\n"
     "  --vignetting K           brightness 1 - K r^2, r over the half diagonal (default 0)\n"
     "  --sunlight GAIN          world-fixed sunlit patches and sky GAIN times brighter\n"
     "                           (default 1: none; 3 with --auto-exposure)\n"
     "  --auto-exposure          a lagging gain keeps the mean grey level at 110; highlights clip\n"
     "  --defocus RADIUS         lens out of focus: disc blur of RADIUS pixels (default 0)\n"
-    "  --jpeg QUALITY           JPEG round trip as compressed image_transport (default 0: off)\n"
-    "  --start-time S           stamp of the first frame (default 1000 s)\n"
-    "  --quiet                  no progress output\n";
+    "  --jpeg QUALITY           JPEG round trip as compressed image_transport (default 0: off)\n";
 
 sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   sds::sim::SequenceParams p;
