@@ -31,6 +31,13 @@ Polygon clip(const Polygon& polygon, const Eigen::Vector3d& a) {
   return out;
 }
 
+/// The rows [begin, end) clamped to the image; end < 0 means the last row.
+cv::Range clampRows(int begin, int end, int height) {
+  if (end < 0) end = height;
+  begin = std::clamp(begin, 0, height);
+  return cv::Range(begin, std::clamp(end, begin, height));
+}
+
 }  // namespace
 
 /// A surface in the camera frame. Per pixel with ray r (unit, or with r.z = 1 for linear cameras):
@@ -128,6 +135,15 @@ cv::Mat Renderer::range() const {
     }
   }
   return range;
+}
+
+Eigen::Vector3f Renderer::point(int x, int y) const {
+  const float depth = depth_.at<float>(y, x);  // z (linear camera) or range along the unit ray
+  if (linear_) {
+    return depth *
+           Eigen::Vector3f(column_x_[static_cast<size_t>(x)], row_y_[static_cast<size_t>(y)], 1.0f);
+  }
+  return depth * ray(x, y);
 }
 
 Eigen::Vector3f Renderer::ray(int x, int y) const {
@@ -280,9 +296,12 @@ bool Renderer::computeSpans(const Prepared& surface, int& row_begin, int& row_en
   return true;
 }
 
-void Renderer::rasterise(const Prepared& ps, const Scene& scene, cv::Mat& image) {
+void Renderer::rasterise(const Prepared& ps, const Scene& scene, int rows_lo, int rows_hi,
+                         cv::Mat& image) {
   int row_begin = 0, row_end = height_;
   const bool bounded = computeSpans(ps, row_begin, row_end);
+  row_begin = std::max(row_begin, rows_lo);
+  row_end = std::min(row_end, rows_hi);
   detail::Span span;
   for (int k = 0; k < 3; ++k) {
     span.n[k] = ps.n[k];
@@ -338,10 +357,12 @@ void Renderer::rasterise(const Prepared& ps, const Scene& scene, cv::Mat& image)
   }
 }
 
-void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image) {
+void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image,
+                      int row_begin, int row_end) {
   image.create(height_, width_, CV_8UC1);
-  depth_.setTo(cv::Scalar(std::numeric_limits<float>::infinity()));
-  index_.setTo(cv::Scalar(-1));
+  const cv::Range rows = clampRows(row_begin, row_end, height_);
+  depth_.rowRange(rows).setTo(cv::Scalar(std::numeric_limits<float>::infinity()));
+  index_.rowRange(rows).setTo(cv::Scalar(-1));
   const Eigen::Matrix3d R = T_cam_world.rotationMatrix();
   const Eigen::Vector3d& t = T_cam_world.translation();
   std::vector<Prepared> visible;
@@ -356,12 +377,12 @@ void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::
   std::sort(visible.begin(), visible.end(),
             [](const Prepared& a, const Prepared& b) { return a.sort_key < b.sort_key; });
   for (const Prepared& prepared : visible)
-    rasterise(prepared, scene, image);
+    rasterise(prepared, scene, rows.start, rows.end, image);
 
   // Background: by the elevation of the ray in the world, (R^T r).z = R.col(2).r.
   const Eigen::Vector3f up = R.col(2).cast<float>();
   const Background& background = scene.background();
-  for (int y = 0; y < height_; ++y) {
+  for (int y = rows.start; y < rows.end; ++y) {
     const int* index = index_.ptr<int>(y);
     std::uint8_t* out = image.ptr<std::uint8_t>(y);
     for (int x = 0; x < width_; ++x) {
@@ -375,12 +396,14 @@ void Renderer::render(const Scene& scene, const geometry::SE3& T_cam_world, cv::
   }
 }
 
-void Renderer::renderColor(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image) {
+void Renderer::renderColor(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image,
+                           int row_begin, int row_end) {
   cv::Mat grey;
-  render(scene, T_cam_world, grey);
+  render(scene, T_cam_world, grey, row_begin, row_end);
+  const cv::Range rows = clampRows(row_begin, row_end, height_);
   image.create(height_, width_, CV_8UC3);
   const std::vector<Surface>& surfaces = scene.surfaces();
-  for (int y = 0; y < height_; ++y) {
+  for (int y = rows.start; y < rows.end; ++y) {
     const int* index = index_.ptr<int>(y);
     const std::uint8_t* in = grey.ptr<std::uint8_t>(y);
     cv::Vec3b* out = image.ptr<cv::Vec3b>(y);

@@ -8,8 +8,8 @@
 namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
-  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover",
-          "desk",           "office_pan",   "city_block",        "city_loop"};
+  return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover", "desk",
+          "office_pan",     "city_block",   "city_loop",         "facade_grid"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed) {
@@ -21,6 +21,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed) {
   if (name == "office_pan") return detail::makeOfficePan(seed);
   if (name == "city_block") return detail::makeCityBlock(seed);
   if (name == "city_loop") return detail::makeCityLoop(seed);
+  if (name == "facade_grid") return detail::makeFacadeGrid(seed);
   std::string known;
   for (const std::string& n : scenarioNames())
     known += (known.empty() ? "" : ", ") + n;

@@ -14,6 +14,7 @@ Scenario makeOfficeOrbit(std::uint32_t seed);
 Scenario makeCorridorStraight(std::uint32_t seed);
 Scenario makeSphereFlyover(std::uint32_t seed);
 Scenario makeDesk(std::uint32_t seed);
+Scenario makeFacadeGrid(std::uint32_t seed);
 Scenario makeOfficePan(std::uint32_t seed);
 Scenario makeCityBlock(std::uint32_t seed);
 Scenario makeCityLoop(std::uint32_t seed);

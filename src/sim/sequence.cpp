@@ -29,6 +29,22 @@ void RealismParams::validate() const {
   require(std::isfinite(blackout_start) && blackout_start >= 0, "blackout start must be >= 0 s");
   require(std::isfinite(blackout_duration) && blackout_duration >= 0,
           "blackout duration must be >= 0 s");
+  require(std::isfinite(rolling_shutter) && rolling_shutter >= 0 && rolling_shutter <= 1,
+          "rolling shutter readout time must be in [0, 1] s");
+  require(rolling_shutter_bands >= 0 && rolling_shutter_bands <= 8192,
+          "rolling shutter bands must be in [0, 8192] (0: every row)");
+  require(std::isfinite(vignetting) && vignetting >= 0 && vignetting < 1,
+          "vignetting must be in [0, 1)");
+  require(std::isfinite(sunlight) && sunlight >= 1 && sunlight <= 20,
+          "sunlight must be in [1, 20] times the shade");
+  require(std::isfinite(defocus) && defocus >= 0 && defocus <= 20,
+          "defocus radius must be in [0, 20] pixels");
+  require(jpeg_quality >= 0 && jpeg_quality <= 100, "JPEG quality must be in [1, 100] (0: off)");
+}
+
+bool RealismParams::cameraEffects() const {
+  return rolling_shutter > 0 || vignetting > 0 || auto_exposure || sunlight != 1.0 || defocus > 0 ||
+         jpeg_quality > 0;
 }
 
 void SequenceParams::validate() const {
@@ -87,6 +103,9 @@ SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(param
   if (params_.max_frames > 0) frame_count_ = std::min(frame_count_, params_.max_frames);
   cv::RNG rng(params_.seed * 7919ULL + 17);
   exposure_phase_ = rng.uniform(0.0, 2.0 * M_PI);
+  if (params_.realism.sunlight != 1.0) {
+    sunlight_ = std::make_unique<Sunlight>(params_.seed, params_.realism.sunlight);
+  }
 }
 
 RenderedFrame SequenceRenderer::pose(int index) const {
@@ -103,13 +122,97 @@ RenderedFrame SequenceRenderer::pose(int index) const {
 }
 
 cv::Mat SequenceRenderer::renderAt(double t) {
-  cv::Mat image;
-  const geometry::SE3 T_cam_world = scenario_.T_world_cam(t).inverse();
-  if (params_.color) {
-    renderer_->renderColor(scenario_.scene, T_cam_world, image);
-  } else {
-    renderer_->render(scenario_.scene, T_cam_world, image);
+  // A rolling shutter reads row y out at t + readout ((y + 0.5) / height - 0.5): the middle row
+  // at the frame's stamp, where the ground truth is. Each band of rows is rendered at the exact
+  // pose of its middle row's time.
+  const int height = params_.height;
+  const double readout = params_.realism.rolling_shutter;
+  const int bands_wanted = params_.realism.rolling_shutter_bands;
+  const int bands = readout > 0 ? (bands_wanted > 0 ? std::min(bands_wanted, height) : height) : 1;
+  cv::Mat image, radiance;
+  for (int b = 0; b < bands; ++b) {
+    const cv::Range rows(b * height / bands, (b + 1) * height / bands);
+    const double t_rows = t + readout * ((rows.start + rows.end) / (2.0 * height) - 0.5);
+    const geometry::SE3 T_world_cam = scenario_.T_world_cam(std::max(0.0, t_rows));
+    const geometry::SE3 T_cam_world = T_world_cam.inverse();
+    if (params_.color) {
+      renderer_->renderColor(scenario_.scene, T_cam_world, image, rows.start, rows.end);
+    } else {
+      renderer_->render(scenario_.scene, T_cam_world, image, rows.start, rows.end);
+    }
+    if (sunlight_) sunlight_->apply(*renderer_, T_world_cam, image, rows, radiance);
   }
+  return sunlight_ ? radiance : image;
+}
+
+bool SequenceRenderer::blackout(double t) const {
+  const RealismParams& realism = params_.realism;
+  return realism.blackout_duration > 0 && t >= realism.blackout_start &&
+         t < realism.blackout_start + realism.blackout_duration;
+}
+
+cv::Mat SequenceRenderer::sensorRadiance(double t) {
+  // The light on the sensor (CV_32F): shutter (motion blur), lens (defocus, softness, vignetting)
+  // and the scene's brightness change, before the exposure gain.
+  const RealismParams& realism = params_.realism;
+  const int n = realism.motion_blur > 0 ? realism.motion_blur_samples : 1;
+  cv::Mat radiance = cv::Mat::zeros(params_.height, params_.width, CV_32FC(params_.color ? 3 : 1));
+  for (int k = 0; k < n; ++k) {
+    const double offset = n > 1 ? realism.motion_blur * ((k + 0.5) / n - 0.5) : 0.0;
+    cv::accumulate(renderAt(std::max(0.0, t + offset)), radiance);
+  }
+  radiance /= n;
+  applyDefocus(radiance, realism.defocus);
+  if (realism.optics_blur > 0) {
+    cv::GaussianBlur(radiance, radiance, cv::Size(0, 0), realism.optics_blur);
+  }
+  applyVignetting(radiance, realism.vignetting);
+  radiance *= 1.0 + realism.exposure_amplitude *
+                        std::sin(2 * M_PI * t / realism.exposure_period + exposure_phase_);
+  return radiance;
+}
+
+double SequenceRenderer::autoExposureGain(int index, const cv::Mat& radiance) {
+  // A frame's gain follows from the frames before it. Rendered in order (the normal case), each
+  // frame meters itself for the next; a frame further ahead replays the frames in between.
+  if (exposure_gains_.empty()) {
+    auto_exposure_.settle(index == 0 ? radiance
+                                     : (blackout(0.0) ? cv::Mat() : sensorRadiance(0.0)));
+    exposure_gains_.push_back(auto_exposure_.gain());
+  }
+  while (static_cast<int>(exposure_gains_.size()) <= index) {
+    const int j = static_cast<int>(exposure_gains_.size()) - 1;
+    meterFrame(j, blackout(j / rate_) ? cv::Mat() : sensorRadiance(j / rate_));
+  }
+  const double gain = exposure_gains_[static_cast<size_t>(index)];
+  if (static_cast<int>(exposure_gains_.size()) == index + 1) meterFrame(index, radiance);
+  return gain;
+}
+
+void SequenceRenderer::meterFrame(int index, const cv::Mat& radiance) {
+  auto_exposure_.setGain(exposure_gains_[static_cast<size_t>(index)]);
+  if (!radiance.empty()) auto_exposure_.meter(radiance, 1.0 / rate_);  // dark: the gain holds
+  exposure_gains_.push_back(auto_exposure_.gain());
+}
+
+cv::Mat SequenceRenderer::cameraImage(int index, double t) {
+  const RealismParams& realism = params_.realism;
+  const int type = params_.color ? CV_8UC3 : CV_8UC1;
+  cv::Mat radiance = blackout(t) ? cv::Mat() : sensorRadiance(t);
+  if (realism.auto_exposure) {
+    const double gain = autoExposureGain(index, radiance);
+    if (!radiance.empty()) radiance *= gain;
+  }
+  if (radiance.empty()) return cv::Mat::zeros(params_.height, params_.width, type);
+  if (realism.noise_sigma > 0) {
+    cv::Mat noise(radiance.size(), radiance.type());
+    cv::RNG rng(params_.seed * 1000003ULL + static_cast<std::uint64_t>(index) * 7777ULL + 1);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, realism.noise_sigma);
+    radiance += noise;
+  }
+  cv::Mat image;
+  radiance.convertTo(image, type);  // saturates: highlights clip at 255
+  if (realism.jpeg_quality > 0) image = jpegRoundTrip(image, realism.jpeg_quality);
   return image;
 }
 
@@ -117,9 +220,12 @@ RenderedFrame SequenceRenderer::render(int index) {
   RenderedFrame frame = pose(index);
   const RealismParams& realism = params_.realism;
   const double t = index / rate_;
+  if (realism.cameraEffects()) {
+    frame.image = cameraImage(index, t);
+    return frame;
+  }
   const int type = params_.color ? CV_8UC3 : CV_8UC1;
-  if (realism.blackout_duration > 0 && t >= realism.blackout_start &&
-      t < realism.blackout_start + realism.blackout_duration) {
+  if (blackout(t)) {
     frame.image = cv::Mat::zeros(params_.height, params_.width, type);
   } else if (realism.motion_blur > 0 && realism.motion_blur_samples > 1) {
     cv::Mat sum = cv::Mat::zeros(params_.height, params_.width, CV_32FC(CV_MAT_CN(type)));

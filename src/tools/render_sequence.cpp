@@ -19,7 +19,7 @@ const char* kUsage =
     "usage: render_sequence --scene NAME --out DIR [--bag FILE] [--seed N] [options]\n"
     "Renders a synthetic image sequence with exact ground truth (doc/sequences.md).\n"
     "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, office_pan,\n"
-    "city_block, city_loop.\n"
+    "city_block, city_loop, facade_grid.\n"
     "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, "
     "TUM),\n"
     "DIR/camera.yaml; with --bag FILE also a rosbag (/camera/image_raw, /camera/camera_info,\n"
@@ -41,7 +41,17 @@ const char* kUsage =
     "  --optics-blur SIGMA      lens softness, Gaussian sigma in pixels (default 0.5)\n"
     "  --blackout START:LENGTH  black frames from START for LENGTH seconds\n"
     "  --start-time S           stamp of the first frame (default 1000 s)\n"
-    "  --quiet                  no progress output\n";
+    "  --quiet                  no progress output\n"
+    "Camera effects (doc/sequences.md):\n"
+    "  --rolling-shutter S      readout time top to bottom row (default 0: global shutter);\n"
+    "                           each row at its own pose, the ground truth at the middle row's\n"
+    "  --rolling-shutter-bands N  N bands of rows, one pose each (default 0: every row)\n"
+    "  --vignetting K           brightness 1 - K r^2, r over the half diagonal (default 0)\n"
+    "  --sunlight GAIN          world-fixed sunlit patches and sky GAIN times brighter\n"
+    "                           (default 1: none; 3 with --auto-exposure)\n"
+    "  --auto-exposure          a lagging gain keeps the mean grey level at 110; highlights clip\n"
+    "  --defocus RADIUS         lens out of focus: disc blur of RADIUS pixels (default 0)\n"
+    "  --jpeg QUALITY           JPEG round trip as compressed image_transport (default 0: off)\n";
 
 sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   sds::sim::SequenceParams p;
@@ -69,6 +79,16 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   p.realism.motion_blur = cl.number("motion-blur", 0.0);
   p.realism.motion_blur_samples = static_cast<int>(cl.integer("blur-samples", 6));
   p.realism.optics_blur = cl.number("optics-blur", 0.5);
+  sds::sim::RealismParams& r = p.realism;
+  r.rolling_shutter = cl.number("rolling-shutter", 0.0);
+  r.rolling_shutter_bands = static_cast<int>(cl.integer("rolling-shutter-bands", 0));
+  r.vignetting = cl.number("vignetting", 0.0);
+  r.auto_exposure = cl.has("auto-exposure");
+  r.sunlight = cl.number("sunlight", r.auto_exposure ? 3.0 : 1.0);
+  r.defocus = cl.number("defocus", 0.0);
+  r.jpeg_quality = static_cast<int>(cl.integer("jpeg", 0));
+  if (cl.has("jpeg") && r.jpeg_quality == 0)
+    throw std::invalid_argument("--jpeg must be in [1, 100]");
   if (const auto blackout = cl.value("blackout")) {
     double start = 0, length = 0;
     char rest = 0;
@@ -84,16 +104,33 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
 }
 
 int run(const sds::io::CommandLine& cl) {
-  cl.rejectUnknownFlags({"scene",       "out",
-                         "bag",         "seed",
-                         "frames",      "fps",
-                         "width",       "height",
-                         "fov",         "distortion",
-                         "color",       "noise",
-                         "exposure",    "exposure-period",
-                         "motion-blur", "blur-samples",
-                         "optics-blur", "blackout",
-                         "start-time",  "quiet"});
+  cl.rejectUnknownFlags({"scene",
+                         "out",
+                         "bag",
+                         "seed",
+                         "frames",
+                         "fps",
+                         "width",
+                         "height",
+                         "fov",
+                         "distortion",
+                         "color",
+                         "noise",
+                         "exposure",
+                         "exposure-period",
+                         "motion-blur",
+                         "blur-samples",
+                         "optics-blur",
+                         "blackout",
+                         "start-time",
+                         "quiet",
+                         "rolling-shutter",
+                         "rolling-shutter-bands",
+                         "vignetting",
+                         "sunlight",
+                         "auto-exposure",
+                         "defocus",
+                         "jpeg"});
   if (!cl.positional().empty()) {
     throw std::invalid_argument("unexpected argument '" + cl.positional().front() + "'");
   }
@@ -133,5 +170,5 @@ int run(const sds::io::CommandLine& cl) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return sds::io::runTool(argc, argv, kUsage, {"color", "quiet"}, run);
+  return sds::io::runTool(argc, argv, kUsage, {"color", "quiet", "auto-exposure"}, run);
 }

@@ -25,15 +25,23 @@ class Renderer {
   /// than ~87 degrees away from the optical axis (the renderer covers less than a half sphere).
   explicit Renderer(const geometry::CameraModel& camera);
 
-  /// Renders the scene seen by a camera at T_cam_world (world -> camera) as 8-bit grey.
-  void render(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image);
+  /// Renders the scene seen by a camera at T_cam_world (world -> camera) as 8-bit grey. With a
+  /// row range [row_begin, row_end) (row_end < 0: the last row) only those rows are rendered and
+  /// the others of `image` (and of range() and surfaceIndex()) are kept: a rolling shutter
+  /// renders each band of rows at its own pose.
+  void render(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image,
+              int row_begin = 0, int row_end = -1);
   /// The same in colour (BGR): the grey image tinted per surface (Surface::tint).
-  void renderColor(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image);
+  void renderColor(const Scene& scene, const geometry::SE3& T_cam_world, cv::Mat& image,
+                   int row_begin = 0, int row_end = -1);
 
   /// Of the last render: the range (metres along the ray) per pixel, +inf where no surface was
   /// hit (CV_32F), and the index of the surface seen per pixel, -1 for the background (CV_32S).
   cv::Mat range() const;
   const cv::Mat& surfaceIndex() const { return index_; }
+  /// Of the last render: the point seen at pixel (x, y) in the camera frame (metres; not finite
+  /// where no surface was hit).
+  Eigen::Vector3f point(int x, int y) const;
   /// Shade 8 pixels at a time with AVX2 (default where the processor has it) or one at a time;
   /// both give the same images up to float rounding.
   void setVectorised(bool vectorised);
@@ -46,7 +54,8 @@ class Renderer {
 
   bool prepare(const Surface& surface, const Scene& scene, const Eigen::Matrix3d& R,
                const Eigen::Vector3d& t, Prepared& out) const;
-  void rasterise(const Prepared& surface, const Scene& scene, cv::Mat& image);
+  void rasterise(const Prepared& surface, const Scene& scene, int rows_lo, int rows_hi,
+                 cv::Mat& image);
   bool computeSpans(const Prepared& surface, int& row_begin, int& row_end);
   bool projectPoint(const Eigen::Vector3d& p_cam, Eigen::Vector2d& pixel) const;
   void appendEdge(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector2d& pa,

@@ -27,7 +27,7 @@ struct Scenario {
 };
 
 /// courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, office_pan, city_block,
-/// city_loop.
+/// city_loop, facade_grid.
 std::vector<std::string> scenarioNames();
 /// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
 /// Throws std::invalid_argument naming the known scenes for an unknown name.

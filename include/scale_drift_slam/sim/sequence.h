@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "scale_drift_slam/geometry/camera_calibration.h"
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/geometry/se3.h"
+#include "scale_drift_slam/sim/camera_effects.h"
 #include "scale_drift_slam/sim/renderer.h"
 #include "scale_drift_slam/sim/scenario.h"
 
@@ -27,7 +29,16 @@ struct RealismParams {
   double optics_blur = 0.5;         ///< Gaussian blur sigma in pixels (lens softness; 0: none).
   double blackout_start = 0.0;      ///< Seconds after the first frame.
   double blackout_duration = 0.0;   ///< Frames in [start, start + duration) are black (0: none).
-  void validate() const;            ///< Throws std::invalid_argument with the reason.
+  // Camera effects (sim/camera_effects.h); any of them on renders through a float pipeline.
+  double rolling_shutter = 0.0;   ///< Readout time, top row to bottom row, s (0: global shutter).
+  int rolling_shutter_bands = 0;  ///< Bands of rows rendered at their own pose (0: every row).
+  double vignetting = 0.0;        ///< Radial fall-off k: the corners get 1 - k of the light.
+  bool auto_exposure = false;     ///< A lagging gain controller keeps the mean grey level.
+  double sunlight = 1.0;          ///< Sunlit patches and sky this many times brighter (1: none).
+  double defocus = 0.0;           ///< Radius of the circle of confusion, pixels (0: in focus).
+  int jpeg_quality = 0;           ///< JPEG round trip at this quality, 1-100 (0: none).
+  bool cameraEffects() const;     ///< Any of the camera effects on.
+  void validate() const;          ///< Throws std::invalid_argument with the reason.
 };
 
 /// The parameters of the sim module: what to render and through which camera.
@@ -73,13 +84,20 @@ class SequenceRenderer {
   const Scenario& scenario() const { return scenario_; }
   const SequenceParams& params() const { return params_; }
 
-  /// Renders frame `index` (0 <= index < frameCount()); throws std::out_of_range otherwise.
+  /// Renders frame `index` (0 <= index < frameCount()); throws std::out_of_range otherwise. With
+  /// auto-exposure a frame's gain depends on the frames before it: rendering in order costs
+  /// nothing extra, a frame further ahead replays the controller over the frames between.
   RenderedFrame render(int index);
   /// The true pose and stamp of frame `index` without rendering it.
   RenderedFrame pose(int index) const;
 
  private:
   cv::Mat renderAt(double t);
+  bool blackout(double t) const;
+  cv::Mat cameraImage(int index, double t);
+  cv::Mat sensorRadiance(double t);
+  double autoExposureGain(int index, const cv::Mat& radiance);
+  void meterFrame(int index, const cv::Mat& radiance);
 
   SequenceParams params_;
   Scenario scenario_;
@@ -88,6 +106,9 @@ class SequenceRenderer {
   double rate_ = 30.0;
   int frame_count_ = 0;
   double exposure_phase_ = 0.0;
+  std::unique_ptr<Sunlight> sunlight_;  ///< With RealismParams::sunlight != 1.
+  AutoExposure auto_exposure_;
+  std::vector<double> exposure_gains_;  ///< Auto-exposure gain of frames 0, 1, ... so far.
 };
 
 /// The camera of a sequence: size, field of view and lens model as in SequenceParams (the
