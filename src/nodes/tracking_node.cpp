@@ -130,7 +130,7 @@ class TrackingNode {
     }
   }
 
-  void onImage(const sensor_msgs::ImageConstPtr& msg) { process(msg->header, *msg); }
+  void onImage(const sensor_msgs::ImageConstPtr& msg) { process(msg->header, msg); }  // shared
   void onCompressedImage(const sensor_msgs::CompressedImageConstPtr& msg) {
     process(msg->header, *msg);
   }
