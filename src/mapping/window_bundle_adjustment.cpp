@@ -128,89 +128,124 @@ double robustCost(const std::vector<double>& errors, double width) {
   return cost;
 }
 
-}  // namespace
-
-WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
-                                               const WindowBundleAdjustmentParams& params) {
-  const common::Stopwatch timer;
-  params.validate();
-  input.validate();
-
-  std::vector<std::array<double, 7>> poses(input.keyframes.size());
-  for (std::size_t k = 0; k < input.keyframes.size(); ++k)
-    input.keyframes[k].T_kf_world.toData(poses[k].data());
+/// The estimate Ceres works on: poses as 7 numbers (features::SE3LeftManifold), points in world.
+struct WindowEstimate {
+  std::vector<std::array<double, 7>> poses;
   std::vector<Eigen::Vector3d> points;
-  points.reserve(input.points.size());
+};
+
+WindowEstimate initialEstimate(const WindowBundleInput& input) {
+  WindowEstimate estimate;
+  estimate.poses.resize(input.keyframes.size());
+  for (std::size_t k = 0; k < input.keyframes.size(); ++k)
+    input.keyframes[k].T_kf_world.toData(estimate.poses[k].data());
+  estimate.points.reserve(input.points.size());
   for (const BundlePoint& p : input.points)
-    points.push_back(p.p_world);
-  const std::vector<double> initial_errors = pixelErrors(input, poses, points);
+    estimate.points.push_back(p.p_world);
+  return estimate;
+}
 
-  // The problem borrows costs, kernel and manifold: they live on this stack frame.
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  ceres::SoftLOneLoss pseudo_huber(params.huber_width_px);  // see features::pseudoHuber
-  features::SE3LeftManifold se3_manifold;
-  std::deque<features::ReprojectionCost> costs;  // stable addresses, no copies
-  std::vector<bool> pose_used(poses.size(), false), point_used(points.size(), false);
-  for (std::size_t i = 0; i < input.observations.size(); ++i) {
-    if (!std::isfinite(initial_errors[i])) continue;
-    const BundleObservation& o = input.observations[i];
-    costs.emplace_back(o.xy, input.focal_length_px);
-    problem.AddResidualBlock(&costs.back(), &pseudo_huber, poses[o.keyframe_index].data(),
-                             points[o.point_index].data());
-    pose_used[o.keyframe_index] = point_used[o.point_index] = true;
+ceres::Problem::Options borrowingProblemOptions() {
+  ceres::Problem::Options options;
+  options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  return options;
+}
+
+/// The Ceres problem over an estimate. The problem borrows costs, kernel and manifold: they are
+/// members, so they live as long as it does.
+class WindowProblem {
+ public:
+  /// Observations not in front of their camera at the start (NaN initial error) are left out.
+  WindowProblem(const WindowBundleInput& input, const std::vector<double>& initial_errors,
+                double huber_width_px, WindowEstimate* estimate)
+      : problem_(borrowingProblemOptions()), pseudo_huber_(huber_width_px) {
+    addResiduals(input, initial_errors, estimate);
+    setBlocks(input, estimate);
   }
 
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  bool any_free = false;
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    if (!pose_used[k]) continue;
-    problem.SetManifold(poses[k].data(), &se3_manifold);
-    if (input.keyframes[k].fixed) problem.SetParameterBlockConstant(poses[k].data());
-    any_free |= !input.keyframes[k].fixed;
-    ordering->AddElementToGroup(poses[k].data(), 1);
-  }
-  for (std::size_t j = 0; j < points.size(); ++j) {
-    if (!point_used[j]) continue;
-    if (input.points[j].fixed) problem.SetParameterBlockConstant(points[j].data());
-    any_free |= !input.points[j].fixed;
-    ordering->AddElementToGroup(points[j].data(), 0);  // eliminated first (Schur complement)
-  }
-
-  WindowBundleResult result;
-  features::BundleStatistics& stats = result.statistics;
-  if (any_free && !costs.empty()) {
+  /// Solves, or reports "nothing to optimise" when every used block is fixed.
+  void solve(const WindowBundleAdjustmentParams& params, features::BundleStatistics* stats) {
+    if (!any_free_ || costs_.empty()) {
+      stats->converged = true;
+      stats->message = "nothing to optimise";
+      return;
+    }
     ceres::Solver::Options options;
     options.linear_solver_type = ceres::SPARSE_SCHUR;
     options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
-    options.linear_solver_ordering = ordering;
+    options.linear_solver_ordering = ordering_;
     options.max_num_iterations = params.max_iterations;
     options.function_tolerance = params.function_tolerance;
     options.num_threads = params.num_threads;
     options.logging_type = ceres::SILENT;
     ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
-    stats.iterations = static_cast<int>(summary.iterations.size()) - 1;
-    stats.converged = summary.termination_type == ceres::CONVERGENCE;
-    stats.message = summary.message;
-  } else {
-    stats.converged = true;
-    stats.message = "nothing to optimise";
+    ceres::Solve(options, &problem_, &summary);
+    stats->iterations = static_cast<int>(summary.iterations.size()) - 1;
+    stats->converged = summary.termination_type == ceres::CONVERGENCE;
+    stats->message = summary.message;
   }
 
-  const std::vector<double> final_errors = pixelErrors(input, poses, points);
+ private:
+  void addResiduals(const WindowBundleInput& input, const std::vector<double>& initial_errors,
+                    WindowEstimate* estimate) {
+    pose_used_.assign(estimate->poses.size(), false);
+    point_used_.assign(estimate->points.size(), false);
+    for (std::size_t i = 0; i < input.observations.size(); ++i) {
+      if (!std::isfinite(initial_errors[i])) continue;
+      const BundleObservation& o = input.observations[i];
+      costs_.emplace_back(o.xy, input.focal_length_px);
+      problem_.AddResidualBlock(&costs_.back(), &pseudo_huber_,
+                                estimate->poses[o.keyframe_index].data(),
+                                estimate->points[o.point_index].data());
+      pose_used_[o.keyframe_index] = point_used_[o.point_index] = true;
+    }
+  }
+
+  /// Manifolds, fixed blocks and the Schur ordering of the blocks the residuals use.
+  void setBlocks(const WindowBundleInput& input, WindowEstimate* estimate) {
+    for (std::size_t k = 0; k < estimate->poses.size(); ++k) {
+      if (!pose_used_[k]) continue;
+      double* pose = estimate->poses[k].data();
+      problem_.SetManifold(pose, &se3_manifold_);
+      if (input.keyframes[k].fixed) problem_.SetParameterBlockConstant(pose);
+      any_free_ |= !input.keyframes[k].fixed;
+      ordering_->AddElementToGroup(pose, 1);
+    }
+    for (std::size_t j = 0; j < estimate->points.size(); ++j) {
+      if (!point_used_[j]) continue;
+      double* point = estimate->points[j].data();
+      if (input.points[j].fixed) problem_.SetParameterBlockConstant(point);
+      any_free_ |= !input.points[j].fixed;
+      ordering_->AddElementToGroup(point, 0);  // eliminated first (Schur complement)
+    }
+  }
+
+  ceres::Problem problem_;
+  ceres::SoftLOneLoss pseudo_huber_;  // see features::pseudoHuber
+  features::SE3LeftManifold se3_manifold_;
+  std::deque<features::ReprojectionCost> costs_;  // stable addresses, no copies
+  std::vector<bool> pose_used_, point_used_;
+  std::shared_ptr<ceres::ParameterBlockOrdering> ordering_ =
+      std::make_shared<ceres::ParameterBlockOrdering>();
+  bool any_free_ = false;
+};
+
+/// Costs, inliers (below the threshold before and after) and their RMSE before and after.
+void summarise(const WindowBundleInput& input, const WindowBundleAdjustmentParams& params,
+               const std::vector<double>& initial_errors, const std::vector<double>& final_errors,
+               WindowBundleResult* result) {
+  features::BundleStatistics& stats = result->statistics;
   stats.initial_cost = robustCost(initial_errors, params.huber_width_px);
   stats.final_cost = robustCost(final_errors, params.huber_width_px);
   stats.num_observations = input.observations.size();
-  result.inlier.resize(input.observations.size());
+  result->inlier.resize(input.observations.size());
   double initial_sq = 0.0, final_sq = 0.0;
   for (std::size_t i = 0; i < final_errors.size(); ++i) {
-    result.inlier[i] = std::isfinite(final_errors[i]) && std::isfinite(initial_errors[i]) &&
-                       final_errors[i] < params.inlier_threshold_px;
-    if (!result.inlier[i]) continue;
+    result->inlier[i] = std::isfinite(final_errors[i]) && std::isfinite(initial_errors[i]) &&
+                        final_errors[i] < params.inlier_threshold_px;
+    if (!result->inlier[i]) continue;
     ++stats.num_inliers;
     initial_sq += initial_errors[i] * initial_errors[i];
     final_sq += final_errors[i] * final_errors[i];
@@ -219,16 +254,39 @@ WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
     stats.initial_rmse_px = std::sqrt(initial_sq / stats.num_inliers);
     stats.final_rmse_px = std::sqrt(final_sq / stats.num_inliers);
   }
+}
 
-  result.keyframes = input.keyframes;
-  for (std::size_t k = 0; k < poses.size(); ++k) {
+/// The input's keyframes and points with the free ones moved to the estimate.
+void writeEstimate(const WindowBundleInput& input, const WindowEstimate& estimate,
+                   WindowBundleResult* result) {
+  result->keyframes = input.keyframes;
+  for (std::size_t k = 0; k < estimate.poses.size(); ++k) {
     if (!input.keyframes[k].fixed)
-      result.keyframes[k].T_kf_world = geometry::SE3::fromData(poses[k].data());
+      result->keyframes[k].T_kf_world = geometry::SE3::fromData(estimate.poses[k].data());
   }
-  result.points = input.points;
-  for (std::size_t j = 0; j < points.size(); ++j)
-    result.points[j].p_world = points[j];
-  stats.time_ms = timer.ms();
+  result->points = input.points;
+  for (std::size_t j = 0; j < estimate.points.size(); ++j)
+    result->points[j].p_world = estimate.points[j];
+}
+
+}  // namespace
+
+WindowBundleResult solveWindowBundleAdjustment(const WindowBundleInput& input,
+                                               const WindowBundleAdjustmentParams& params) {
+  const common::Stopwatch timer;
+  params.validate();
+  input.validate();
+  WindowEstimate estimate = initialEstimate(input);
+  const std::vector<double> initial_errors = pixelErrors(input, estimate.poses, estimate.points);
+
+  WindowBundleResult result;
+  WindowProblem problem(input, initial_errors, params.huber_width_px, &estimate);
+  problem.solve(params, &result.statistics);
+
+  const std::vector<double> final_errors = pixelErrors(input, estimate.poses, estimate.points);
+  summarise(input, params, initial_errors, final_errors, &result);
+  writeEstimate(input, estimate, &result);
+  result.statistics.time_ms = timer.ms();
   return result;
 }
 

@@ -11,19 +11,16 @@
 #include <random>
 
 #include <image_transport/image_transport.h>
-#include <nav_msgs/Odometry.h>
-#include <nav_msgs/Path.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
-#include <tf2_ros/static_transform_broadcaster.h>
-#include <tf2_ros/transform_broadcaster.h>
 #include <opencv2/core.hpp>
 
 #include "scale_drift_slam/ros/conversions.h"
-#include "scale_drift_slam/ros/frames.h"
 #include "scale_drift_slam/ros/image_conversions.h"
+#include "scale_drift_slam/ros/image_stamps.h"
 #include "scale_drift_slam/ros/node_params.h"
+#include "scale_drift_slam/ros/pose_publisher.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/ros/visualization.h"
 #include "scale_drift_slam/system/tracker_inbox.h"
@@ -36,35 +33,22 @@ class TrackingNode {
  public:
   TrackingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh,
                ros_conversions::TrackingNodeConfig config)
-      : config_(std::move(config)), params_(config_.node), it_(nh), odom_(params_.map_z_up) {
+      : config_(std::move(config)), params_(config_.node), it_(nh), poses_(nh, params_) {
     inbox_.startSession(newSession());
     if (config_.calibration) setCamera(*config_.calibration);
     subscribeImages(nh);
     info_sub_ = nh.subscribe("camera_info", 5, &TrackingNode::onCameraInfo, this);
-    ros::SubscribeOptions options = ros::SubscribeOptions::create<scale_drift_slam::MapUpdate>(
-        "map_updates", 20,
-        [this](const scale_drift_slam::MapUpdateConstPtr& msg) { receive(*msg); }, ros::VoidPtr(),
-        &update_queue_);
-    update_sub_ = nh.subscribe(options);
-    ros::SubscribeOptions answers =
-        ros::SubscribeOptions::create<scale_drift_slam::RelocalisationAnswer>(
-            "relocalisation_answers", 5,
-            [this](const scale_drift_slam::RelocalisationAnswerConstPtr& msg) { receive(*msg); },
-            ros::VoidPtr(), &update_queue_);
-    answer_sub_ = nh.subscribe(answers);
+    update_sub_ =
+        subscribeToInbox(nh, "map_updates", 20, &ros_conversions::fromMapUpdateMsg, "a map update");
+    answer_sub_ =
+        subscribeToInbox(nh, "relocalisation_answers", 5,
+                         &ros_conversions::fromRelocalisationAnswerMsg, "a relocalisation answer");
     keyframe_pub_ = nh.advertise<scale_drift_slam::Keyframe>("keyframes", 20);
     request_pub_ =
         nh.advertise<scale_drift_slam::RelocalisationRequest>("relocalisation_requests", 2);
     status_pub_ = nh.advertise<scale_drift_slam::TrackingStatus>("tracking_status", 10);
-    odometry_pub_ = nh.advertise<nav_msgs::Odometry>("odometry", 10);
-    path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
     debug_pub_ = it_.advertise("debug_image", 1);
     reset_srv_ = pnh.advertiseService("reset", &TrackingNode::onReset, this);
-    if (params_.publish_optical_transform) {
-      static_broadcaster_.sendTransform(
-          ros_conversions::toTransformStampedMsg(ros_conversions::bodyFromOptical(), ros::Time(0),
-                                                 params_.frames.camera, params_.frames.optical));
-    }
     update_spinner_.start();
   }
   ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
@@ -84,6 +68,24 @@ class TrackingNode {
                                  image_transport::TransportHints(params_.transport));
     }
     ROS_INFO("tracking images on %s (transport %s)", topic.c_str(), params_.transport.c_str());
+  }
+
+  /// Map updates and relocalisation answers arrive on the update queue's own thread: there they
+  /// are only converted and queued in the inbox, never applied to the tracker.
+  template <typename Message, typename Core>
+  ros::Subscriber subscribeToInbox(ros::NodeHandle& nh, const std::string& topic, int queue_size,
+                                   Core (*convert)(const Message&), const char* what) {
+    ros::SubscribeOptions options = ros::SubscribeOptions::create<Message>(
+        topic, queue_size,
+        [this, convert, what](const boost::shared_ptr<const Message>& msg) {
+          try {
+            inbox_.push(system::Addressed<Core>{ros_conversions::envelopeOf(*msg), convert(*msg)});
+          } catch (const std::exception& e) {
+            ROS_ERROR_THROTTLE(5, "ignoring %s: %s", what, e.what());
+          }
+        },
+        ros::VoidPtr(), &update_queue_);
+    return nh.subscribe(options);
   }
 
   static std::uint32_t newSession() { return std::random_device{}() | 1u; }
@@ -107,8 +109,7 @@ class TrackingNode {
   /// start afresh; what they still send about the old map is dropped.
   void startSession() {
     inbox_.startSession(newSession());
-    odom_.reset();
-    path_.clear();
+    poses_.reset();
     last_state_.reset();
   }
 
@@ -129,7 +130,7 @@ class TrackingNode {
     }
   }
 
-  void onImage(const sensor_msgs::ImageConstPtr& msg) { process(msg->header, *msg); }
+  void onImage(const sensor_msgs::ImageConstPtr& msg) { process(msg->header, msg); }  // shared
   void onCompressedImage(const sensor_msgs::CompressedImageConstPtr& msg) {
     process(msg->header, *msg);
   }
@@ -143,15 +144,14 @@ class TrackingNode {
                         info_sub_.getTopic().c_str());
       return;
     }
-    if (!last_stamp_.isZero() && header.stamp <= last_stamp_) {
-      if (header.stamp == last_stamp_) {
-        ROS_WARN_THROTTLE(5, "dropping an image with the stamp of the previous one (%.6f)",
-                          header.stamp.toSec());
-        return;
-      }
-      resetTracker("image time jumped backwards from " + std::to_string(last_stamp_.toSec()) +
-                   " to " + std::to_string(header.stamp.toSec()) + " s (bag restarted?)");
+    const ros_conversions::ImageStampCheck stamp_check =
+        ros_conversions::checkImageStamp(last_stamp_, header.stamp);
+    if (stamp_check.duplicate) {
+      ROS_WARN_THROTTLE(5, "dropping an image with the stamp of the previous one (%.6f)",
+                        header.stamp.toSec());
+      return;
     }
+    if (!stamp_check.restart_reason.empty()) resetTracker(stamp_check.restart_reason);
     ros_conversions::CameraImage image;
     try {
       image = ros_conversions::cameraImageFromMsg(msg);
@@ -176,27 +176,9 @@ class TrackingNode {
     publish(header, result, image);
   }
 
-  /// Called on the update thread: convert and queue, never touch the tracker.
-  void receive(const scale_drift_slam::MapUpdate& msg) {
-    try {
-      inbox_.push(system::Addressed<map::MapUpdate>{ros_conversions::envelopeOf(msg),
-                                                    ros_conversions::fromMapUpdateMsg(msg)});
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "ignoring a map update: %s", e.what());
-    }
-  }
-  void receive(const scale_drift_slam::RelocalisationAnswer& msg) {
-    try {
-      inbox_.push(system::Addressed<map::RelocalisationAnswer>{
-          ros_conversions::envelopeOf(msg), ros_conversions::fromRelocalisationAnswerMsg(msg)});
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(5, "ignoring a relocalisation answer: %s", e.what());
-    }
-  }
-
   /// Before each frame: the map updates and relocalisation answers that arrived since.
   void applyReceived() {
-    const system::TrackerInbox::Report report = inbox_.drain(*tracker_, path_.trajectory());
+    const system::TrackerInbox::Report report = inbox_.drain(*tracker_, poses_.trajectory());
     if (report.new_mapper) {
       ROS_WARN(
           "map updates from a new mapper (restarted or reset): keeping the tracker's map, "
@@ -214,58 +196,23 @@ class TrackingNode {
                const ros_conversions::CameraImage& image) {
     logState(result);
     if (result.loop_correction) {  // the world moved: C (map -> odom) and the whole path follow
-      odom_.applyCorrection(*result.loop_correction);
-      path_.rebuild();
-      path_pub_.publish(path_.message(header.stamp));
-      frames_since_path_ = 0;
+      poses_.applyCorrection(*result.loop_correction, header.stamp);
       ROS_INFO("loop correction applied (scale %.4f): map -> odom and the path moved",
-               odom_.correction().scale());
+               poses_.correction().scale());
     }
     for (const map::KeyframeMessage& keyframe : result.keyframes) {
-      scale_drift_slam::Keyframe msg = ros_conversions::toKeyframeMsg(keyframe);
-      ros_conversions::setEnvelope(inbox_.address(keyframe.map_version), &msg);
-      msg.camera = camera_info_;
-      msg.camera.header.stamp = msg.header.stamp;
-      keyframe_pub_.publish(msg);
+      keyframe_pub_.publish(ros_conversions::toKeyframeMsg(
+          keyframe, inbox_.address(keyframe.map_version), camera_info_));
     }
     if (result.relocalisation_request) publishRequest(*result.relocalisation_request);
-    scale_drift_slam::TrackingStatus status = ros_conversions::toTrackingStatusMsg(result);
-    status.header.stamp = header.stamp;
-    status.header.frame_id = params_.frames.optical;
-    status.session = inbox_.session();
-    status.keyframes = static_cast<std::uint32_t>(tracker_->trackingMap().numKeyframes());
-    status.map_points = static_cast<std::uint32_t>(tracker_->trackingMap().numPoints());
-    status.candidates = static_cast<std::uint32_t>(tracker_->numCandidates());
-    status.map_version = inbox_.address(tracker_->trackingMap().version()).map_version;
-    status_pub_.publish(status);
-    if (result.has_pose) {
-      path_.add(header.stamp.toSec(), result.T_cam_world, result.reference_keyframe);
-      publishPose(header.stamp, result.T_cam_world);
-    }
+    status_pub_.publish(ros_conversions::toTrackingStatusMsg(
+        result, *tracker_, inbox_.address(tracker_->trackingMap().version()), header.stamp,
+        params_.frames.optical));
+    if (result.has_pose)
+      poses_.publish(header.stamp, result.T_cam_world, result.reference_keyframe);
     if (debug_pub_.getNumSubscribers() > 0 && !result.rejected) {
-      std_msgs::Header debug_header = header;
-      debug_header.frame_id = params_.frames.optical;
-      const cv::Mat grey = features::toGrey(image.image, image.encoding);
       debug_pub_.publish(
-          ros_conversions::toBgr8Msg(ros_conversions::debugImage(grey, result), debug_header));
-    }
-  }
-
-  void publishPose(const ros::Time& stamp, const geometry::SE3& T_cam_world) {
-    const ros_conversions::CameraTransforms t = odom_.transforms(T_cam_world);
-    const ros_conversions::FrameNames& f = params_.frames;
-    broadcaster_.sendTransform(
-        {ros_conversions::toTransformStampedMsg(t.T_map_odom, stamp, f.map, f.odom),
-         ros_conversions::toTransformStampedMsg(t.T_odom_body, stamp, f.odom, f.camera)});
-    nav_msgs::Odometry odometry;  // pose only: no covariance or twist is estimated
-    odometry.header.stamp = stamp;
-    odometry.header.frame_id = f.odom;
-    odometry.child_frame_id = f.camera;
-    odometry.pose.pose = ros_conversions::toPoseMsg(t.T_odom_body);
-    odometry_pub_.publish(odometry);
-    if (++frames_since_path_ >= params_.path_publish_every) {
-      frames_since_path_ = 0;
-      path_pub_.publish(path_.message(stamp));
+          ros_conversions::debugImageMsg(image, result, header, params_.frames.optical));
     }
   }
 
@@ -309,23 +256,18 @@ class TrackingNode {
   image_transport::Subscriber image_sub_;
   image_transport::Publisher debug_pub_;
   ros::Subscriber compressed_sub_, info_sub_, update_sub_, answer_sub_;
-  ros::Publisher keyframe_pub_, request_pub_, status_pub_, odometry_pub_, path_pub_;
+  ros::Publisher keyframe_pub_, request_pub_, status_pub_;
   ros::ServiceServer reset_srv_;
   std::string image_topic_;
-  tf2_ros::TransformBroadcaster broadcaster_;
-  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  ros_conversions::PosePublisher poses_;  ///< tf, odometry and path; the loop correction.
 
   geometry::CameraCalibration calibration_;
   std::shared_ptr<const geometry::CameraModel> camera_;
   sensor_msgs::CameraInfo camera_info_;
   std::unique_ptr<tracking::Tracker> tracker_;
   system::TrackerInbox inbox_;  ///< Map updates and relocalisation answers; the session.
-  ros_conversions::OdomFrame odom_;
   ros::Time last_stamp_;
   std::optional<tracking::TrackingState> last_state_;
-  ros_conversions::CameraPath path_{odom_.mapFromWorld(), params_.frames.map,
-                                    static_cast<std::size_t>(params_.path_max_poses)};
-  int frames_since_path_ = 0;
   ros::AsyncSpinner update_spinner_{1, &update_queue_};  // map updates and answers
 };
 

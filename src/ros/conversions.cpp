@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <tf2_eigen/tf2_eigen.h>
+
 namespace scale_drift_slam::ros_conversions {
 
 geometry::CameraCalibration calibrationFromCameraInfo(const sensor_msgs::CameraInfo& info) {
@@ -41,48 +43,48 @@ sensor_msgs::CameraInfo cameraInfoFromCalibration(const geometry::CameraCalibrat
 
 namespace {
 
-geometry_msgs::Quaternion toQuaternionMsg(const Eigen::Quaterniond& q) {
-  geometry_msgs::Quaternion msg;
-  msg.x = q.x();
-  msg.y = q.y();
-  msg.z = q.z();
-  msg.w = q.w();
-  return msg;
+// Eigen <-> geometry_msgs by tf2_eigen; the core's SE3 and Sim3 are assembled from the parts.
+Eigen::Quaterniond fromQuaternionMsg(const geometry_msgs::Quaternion& msg) {
+  Eigen::Quaterniond q;
+  tf2::fromMsg(msg, q);
+  return q;
 }
 
-Eigen::Quaterniond fromQuaternionMsg(const geometry_msgs::Quaternion& msg) {
-  return Eigen::Quaterniond(msg.w, msg.x, msg.y, msg.z);
+template <typename Message>  // geometry_msgs::Point or Vector3
+Eigen::Vector3d fromVectorMsg(const Message& msg) {
+  Eigen::Vector3d v;
+  tf2::fromMsg(msg, v);
+  return v;
+}
+
+geometry_msgs::Vector3 toVector3Msg(const Eigen::Vector3d& v) {
+  geometry_msgs::Vector3 msg;
+  tf2::toMsg(v, msg);
+  return msg;
 }
 
 }  // namespace
 
 geometry_msgs::Pose toPoseMsg(const geometry::SE3& T) {
   geometry_msgs::Pose pose;
-  pose.orientation = toQuaternionMsg(T.rotation());
-  pose.position.x = T.translation().x();
-  pose.position.y = T.translation().y();
-  pose.position.z = T.translation().z();
+  pose.orientation = tf2::toMsg(T.rotation());
+  pose.position = tf2::toMsg(T.translation());
   return pose;
 }
 
 geometry::SE3 fromPoseMsg(const geometry_msgs::Pose& pose) {
-  return geometry::SE3(fromQuaternionMsg(pose.orientation),
-                       Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z));
+  return geometry::SE3(fromQuaternionMsg(pose.orientation), fromVectorMsg(pose.position));
 }
 
 geometry_msgs::Transform toTransformMsg(const geometry::SE3& T) {
   geometry_msgs::Transform transform;
-  transform.rotation = toQuaternionMsg(T.rotation());
-  transform.translation.x = T.translation().x();
-  transform.translation.y = T.translation().y();
-  transform.translation.z = T.translation().z();
+  transform.rotation = tf2::toMsg(T.rotation());
+  transform.translation = toVector3Msg(T.translation());
   return transform;
 }
 
 geometry::SE3 fromTransformMsg(const geometry_msgs::Transform& transform) {
-  return geometry::SE3(
-      fromQuaternionMsg(transform.rotation),
-      Eigen::Vector3d(transform.translation.x, transform.translation.y, transform.translation.z));
+  return geometry::SE3(fromQuaternionMsg(transform.rotation), fromVectorMsg(transform.translation));
 }
 
 geometry_msgs::TransformStamped toTransformStampedMsg(const geometry::SE3& T_parent_child,
@@ -99,10 +101,8 @@ geometry_msgs::TransformStamped toTransformStampedMsg(const geometry::SE3& T_par
 
 scale_drift_slam::Sim3 toSim3Msg(const geometry::Sim3& S) {
   scale_drift_slam::Sim3 msg;
-  msg.rotation = toQuaternionMsg(S.rotation());
-  msg.translation.x = S.translation().x();
-  msg.translation.y = S.translation().y();
-  msg.translation.z = S.translation().z();
+  msg.rotation = tf2::toMsg(S.rotation());
+  msg.translation = toVector3Msg(S.translation());
   msg.scale = S.scale();
   return msg;
 }
@@ -119,9 +119,8 @@ geometry::Sim3 fromSim3Msg(const scale_drift_slam::Sim3& msg) {
     throw std::invalid_argument(
         "Sim3 message has a non-finite translation or a non-finite or zero quaternion");
   }
-  return geometry::Sim3::fromScale(
-      fromQuaternionMsg(msg.rotation),
-      Eigen::Vector3d(msg.translation.x, msg.translation.y, msg.translation.z), msg.scale);
+  return geometry::Sim3::fromScale(fromQuaternionMsg(msg.rotation), fromVectorMsg(msg.translation),
+                                   msg.scale);
 }
 
 }  // namespace scale_drift_slam::ros_conversions

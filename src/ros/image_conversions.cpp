@@ -1,38 +1,51 @@
 #include "scale_drift_slam/ros/image_conversions.h"
 
-#include <cstring>
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/image_encodings.h>
 #include <opencv2/imgcodecs.hpp>
 
 namespace scale_drift_slam::ros_conversions {
 namespace {
 
-int matTypeOf(features::PixelEncoding encoding) {
-  switch (encoding) {
-    case features::PixelEncoding::kMono8:
-      return CV_8UC1;
-    case features::PixelEncoding::kMono16:
-      return CV_16UC1;
-    case features::PixelEncoding::kBgr8:
-    case features::PixelEncoding::kRgb8:
-      return CV_8UC3;
-    case features::PixelEncoding::kBgra8:
-    case features::PixelEncoding::kRgba8:
-      return CV_8UC4;
-  }
-  return CV_8UC1;
+namespace encodings = sensor_msgs::image_encodings;
+
+/// Encodings the core does not take, converted to mono8 by cv_bridge (demosaicing, the Y plane).
+constexpr std::array<const char*, 5> kConvertedToMono8 = {"bayer_rggb8", "bayer_bggr8",
+                                                          "bayer_gbrg8", "bayer_grbg8", "yuv422"};
+
+bool convertedToMono8(const std::string& encoding) {
+  return std::find(kConvertedToMono8.begin(), kConvertedToMono8.end(), encoding) !=
+         kConvertedToMono8.end();
 }
 
-/// Copies rows of `msg` into a new image of `type` after checking the announced sizes.
-cv::Mat copyPixels(const sensor_msgs::Image& msg, int type) {
-  const std::size_t row_bytes =
-      static_cast<std::size_t>(msg.width) * static_cast<std::size_t>(CV_ELEM_SIZE(type));
+/// The core's encoding of the message as the tracker gets it; throws naming the accepted ones.
+features::PixelEncoding coreEncodingOf(const std::string& encoding) {
+  if (convertedToMono8(encoding)) return features::PixelEncoding::kMono8;
+  try {
+    return features::parsePixelEncoding(encoding);
+  } catch (const std::invalid_argument& e) {
+    std::string converted;
+    for (const char* name : kConvertedToMono8)
+      converted += (converted.empty() ? "" : ", ") + std::string(name);
+    throw std::invalid_argument(std::string(e.what()) + "; also " + converted + " (as mono8)");
+  }
+}
+
+/// cv_bridge wraps the data as width, height and step announce without checking its size: a
+/// truncated message would be read past its end, so it is refused here first.
+void checkImageData(const sensor_msgs::Image& msg) {
   if (msg.width == 0 || msg.height == 0) {
     throw std::invalid_argument("empty image (" + std::to_string(msg.width) + " x " +
                                 std::to_string(msg.height) + ")");
   }
+  const std::size_t row_bytes = static_cast<std::size_t>(msg.width) *
+                                encodings::numChannels(msg.encoding) *
+                                (encodings::bitDepth(msg.encoding) / 8);
   if (msg.step < row_bytes ||
       msg.data.size() < static_cast<std::size_t>(msg.step) * static_cast<std::size_t>(msg.height)) {
     throw std::invalid_argument("image data (" + std::to_string(msg.data.size()) + " bytes, step " +
@@ -40,28 +53,62 @@ cv::Mat copyPixels(const sensor_msgs::Image& msg, int type) {
                                 std::to_string(msg.width) + " x " + std::to_string(msg.height) +
                                 " " + msg.encoding + " pixels");
   }
-  cv::Mat image(static_cast<int>(msg.height), static_cast<int>(msg.width), type);
-  for (int y = 0; y < image.rows; ++y) {
-    std::memcpy(image.ptr(y), &msg.data[static_cast<std::size_t>(y) * msg.step], row_bytes);
+}
+
+/// cv_bridge's view of the checked message: shared when `target` is empty (and the data is in
+/// the machine's byte order), converted otherwise. cv_bridge reports problems as
+/// cv_bridge::Exception and OpenCV's as cv::Exception (e.g. a 16-bit row step that is odd).
+cv_bridge::CvImageConstPtr bridge(const sensor_msgs::Image& msg,
+                                  const boost::shared_ptr<const void>& owner,
+                                  const std::string& target) {
+  try {
+    return cv_bridge::toCvShare(msg, owner, target);
+  } catch (const cv_bridge::Exception& e) {
+    throw std::invalid_argument("cv_bridge cannot convert the " + msg.encoding +
+                                " image: " + e.what());
+  } catch (const cv::Exception& e) {
+    throw std::invalid_argument("cv_bridge cannot read the " + msg.encoding +
+                                " image: " + e.what());
   }
-  if (CV_ELEM_SIZE1(type) == 2 && msg.is_bigendian) {
-    // The wire order is big-endian: swap bytes into the machine's (little-endian) order.
-    image.forEach<std::uint16_t>(
-        [](std::uint16_t& v, const int*) { v = static_cast<std::uint16_t>((v >> 8) | (v << 8)); });
+}
+
+CameraImage convert(const sensor_msgs::Image& msg, const boost::shared_ptr<const void>& owner) {
+  CameraImage result;
+  result.encoding = coreEncodingOf(msg.encoding);  // refuses unknown encodings with the list
+  checkImageData(msg);
+  const cv_bridge::CvImageConstPtr bridged =
+      bridge(msg, owner, convertedToMono8(msg.encoding) ? encodings::MONO8 : "");
+  result.image = bridged->image;
+  result.owner = bridged;
+  const int expected = CV_MAKETYPE(encodings::bitDepth(bridged->encoding) == 16 ? CV_16U : CV_8U,
+                                   encodings::numChannels(bridged->encoding));
+  if (result.image.type() != expected && result.image.elemSize() == CV_ELEM_SIZE(expected)) {
+    // cv_bridge 1.16 swaps big-endian 16-bit data into the machine's order but returns it as
+    // bytes (CV_8UC2; its reshape is discarded): view the swapped pixels as what they are.
+    result.image = cv::Mat(result.image.rows, result.image.cols, expected, result.image.data,
+                           result.image.step);
   }
-  return image;
+  return result;
 }
 
 }  // namespace
 
+CameraImage cameraImageFromMsg(const sensor_msgs::ImageConstPtr& msg) {
+  return convert(*msg, msg);
+}
+
 CameraImage cameraImageFromMsg(const sensor_msgs::Image& msg) {
-  CameraImage result;
-  result.encoding = features::parsePixelEncoding(msg.encoding);  // names the accepted ones
-  result.image = copyPixels(msg, matTypeOf(result.encoding));
+  CameraImage result = convert(msg, nullptr);
+  // Pixels the image does not own (the message's, or cv_bridge's viewed as another type) are
+  // copied: nothing keeps them alive once the owner goes.
+  if (result.image.u == nullptr) result.image = result.image.clone();
+  result.owner.reset();
   return result;
 }
 
 CameraImage cameraImageFromMsg(const sensor_msgs::CompressedImage& msg) {
+  // Decoded by OpenCV itself: cv_bridge would guess the encoding from the format string, the
+  // decoded image's type tells it exactly.
   CameraImage result;
   if (!msg.data.empty()) result.image = cv::imdecode(msg.data, cv::IMREAD_UNCHANGED);
   if (result.image.empty()) {
@@ -72,41 +119,26 @@ CameraImage cameraImageFromMsg(const sensor_msgs::CompressedImage& msg) {
   return result;
 }
 
-namespace {
-
-sensor_msgs::Image packedMsg(const cv::Mat& image, const std::string& encoding,
-                             const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.encoding = encoding;
-  msg.width = static_cast<std::uint32_t>(image.cols);
-  msg.height = static_cast<std::uint32_t>(image.rows);
-  msg.step = static_cast<std::uint32_t>(image.cols * image.elemSize());
-  msg.is_bigendian = 0;
-  msg.data.resize(static_cast<std::size_t>(msg.step) * msg.height);
-  for (int y = 0; y < image.rows; ++y) {
-    std::memcpy(&msg.data[static_cast<std::size_t>(y) * msg.step], image.ptr(y), msg.step);
-  }
-  return msg;
-}
-
-}  // namespace
-
 sensor_msgs::Image toMono8Msg(const cv::Mat& grey, const std_msgs::Header& header) {
   if (grey.type() != CV_8UC1) throw std::invalid_argument("a mono8 image must be CV_8UC1");
-  return packedMsg(grey, "mono8", header);
+  sensor_msgs::Image msg;
+  cv_bridge::CvImage(header, encodings::MONO8, grey).toImageMsg(msg);
+  return msg;
 }
 
 sensor_msgs::Image toBgr8Msg(const cv::Mat& bgr, const std_msgs::Header& header) {
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("a bgr8 image must be CV_8UC3");
-  return packedMsg(bgr, "bgr8", header);
+  sensor_msgs::Image msg;
+  cv_bridge::CvImage(header, encodings::BGR8, bgr).toImageMsg(msg);
+  return msg;
 }
 
 cv::Mat fromMono8Msg(const sensor_msgs::Image& msg) {
-  if (msg.encoding != "mono8" && msg.encoding != "8UC1") {
+  if (msg.encoding != encodings::MONO8 && msg.encoding != encodings::TYPE_8UC1) {
     throw std::invalid_argument("expected a mono8 image, got '" + msg.encoding + "'");
   }
-  return copyPixels(msg, CV_8UC1);
+  checkImageData(msg);
+  return bridge(msg, nullptr, "")->image.clone();  // the keyframe outlives the message
 }
 
 }  // namespace scale_drift_slam::ros_conversions

@@ -67,6 +67,16 @@ scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe) {
   return msg;
 }
 
+scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe,
+                                         const system::Envelope& address,
+                                         const sensor_msgs::CameraInfo& camera) {
+  scale_drift_slam::Keyframe msg = toKeyframeMsg(keyframe);
+  setEnvelope(address, &msg);
+  msg.camera = camera;
+  msg.camera.header.stamp = msg.header.stamp;
+  return msg;
+}
+
 map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg,
                                      std::string* image_problem) {
   map::KeyframeMessage keyframe;
@@ -322,6 +332,22 @@ scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult
   msg.total_ms = static_cast<float>(result.times.total);
   msg.cpu_ms = static_cast<float>(result.times.cpu);
   msg.message = result.message;
+  return msg;
+}
+
+scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result,
+                                                     const tracking::Tracker& tracker,
+                                                     const system::Envelope& map_address,
+                                                     const ros::Time& stamp,
+                                                     const std::string& frame_id) {
+  scale_drift_slam::TrackingStatus msg = toTrackingStatusMsg(result);
+  msg.header.stamp = stamp;
+  msg.header.frame_id = frame_id;
+  msg.session = map_address.session;
+  msg.keyframes = static_cast<std::uint32_t>(tracker.trackingMap().numKeyframes());
+  msg.map_points = static_cast<std::uint32_t>(tracker.trackingMap().numPoints());
+  msg.candidates = static_cast<std::uint32_t>(tracker.numCandidates());
+  msg.map_version = map_address.map_version;
   return msg;
 }
 

@@ -192,4 +192,11 @@ cv::Mat debugImage(const cv::Mat& grey, const tracking::FrameResult& result) {
   return image;
 }
 
+sensor_msgs::Image debugImageMsg(const CameraImage& image, const tracking::FrameResult& result,
+                                 const std_msgs::Header& header, const std::string& frame_id) {
+  std_msgs::Header debug_header = header;
+  debug_header.frame_id = frame_id;
+  return toBgr8Msg(debugImage(features::toGrey(image.image, image.encoding), result), debug_header);
+}
+
 }  // namespace scale_drift_slam::ros_conversions

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -130,6 +131,111 @@ double percentile(std::vector<double> values, double p) {
   return values[static_cast<std::size_t>(p * (values.size() - 1))];
 }
 
+/// DATASET/groundtruth.txt sorted by time; empty when there is none.
+std::vector<sds::io::StampedPose> loadTruth(const std::string& dataset) {
+  std::vector<sds::io::StampedPose> truth;
+  if (std::ifstream(dataset + "/groundtruth.txt")) {
+    truth = sds::io::loadTrajectory(dataset + "/groundtruth.txt");
+    std::sort(truth.begin(), truth.end(),
+              [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
+  }
+  return truth;
+}
+
+/// --calib, else DATASET/camera.yaml when present; null: keypoints stay in raw pixels.
+std::unique_ptr<sds::geometry::CameraModel> openCamera(const sds::io::CommandLine& cl,
+                                                       const std::string& dataset) {
+  const std::string calib = cl.text("calib", dataset + "/camera.yaml");
+  if (cl.has("calib") || std::ifstream(calib)) {
+    return sds::geometry::makeCameraModel(sds::io::loadCalibrationYaml(calib));
+  }
+  return nullptr;
+}
+
+/// queries.txt: the query's outcome and every candidate checked with its geometric figures.
+void logQuery(const sds::loop::PlaceQueryResult& result, std::ofstream& queries) {
+  queries << result.describe() << "\n";
+  for (const sds::loop::LoopCandidate& c : result.candidates) {
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "  candidate %u: normalised %.2f, %d matches, %d inliers (%s), coverage %.2f, "
+                  "scale change %.2f, %d consecutive: %s",
+                  c.keyframe_id, c.normalized_score, c.geometry.matches, c.geometry.inliers,
+                  c.geometry.model.empty() ? "-" : c.geometry.model.c_str(), c.geometry.coverage,
+                  c.geometry.scale_change, c.consistent_queries, sds::loop::toString(c.status));
+    queries << line << (c.reason.empty() ? "" : ": " + c.reason) << "\n";
+  }
+}
+
+/// What the keyframe loop gathered.
+struct DetectionTally {
+  nlohmann::json loops = nlohmann::json::array();
+  std::vector<double> extract_ms;
+  std::vector<double> query_ms;
+  int true_loops = 0;
+  int false_loops = 0;
+};
+
+/// The accepted loop as loops.json lists it; with ground truth, whether it is true (cameras
+/// within true_distance and true_angle), counted in the tally.
+nlohmann::json loopEntry(const std::vector<Frame>& frames, std::size_t k,
+                         const sds::loop::LoopCandidate& loop,
+                         const std::vector<sds::io::StampedPose>& truth, double true_distance,
+                         double true_angle, DetectionTally* tally) {
+  nlohmann::json entry = {{"query_id", static_cast<sds::map::KeyframeId>(k)},
+                          {"query_time", frames[k].timestamp},
+                          {"match_id", loop.keyframe_id},
+                          {"match_time", frames[loop.keyframe_id].timestamp},
+                          {"score", loop.score},
+                          {"normalized_score", loop.normalized_score},
+                          {"matches", loop.geometry.matches},
+                          {"inliers", loop.geometry.inliers},
+                          {"coverage", loop.geometry.coverage},
+                          {"scale_change", loop.geometry.scale_change},
+                          {"model", loop.geometry.model},
+                          {"consistent_queries", loop.consistent_queries}};
+  const auto* a = truth.empty() ? nullptr : poseAt(truth, frames[k].timestamp);
+  const auto* b = truth.empty() ? nullptr : poseAt(truth, frames[loop.keyframe_id].timestamp);
+  if (a != nullptr && b != nullptr) {
+    const double d = (a->T_world_cam.translation() - b->T_world_cam.translation()).norm();
+    const double angle = angleDeg(a->T_world_cam, b->T_world_cam);
+    const bool correct = d <= true_distance && angle <= true_angle;
+    (correct ? tally->true_loops : tally->false_loops) += 1;
+    entry["true_distance"] = d;
+    entry["true_angle_deg"] = angle;
+    entry["correct"] = correct;
+  }
+  return entry;
+}
+
+/// DIR/loops.json (the counts, timing medians and loops) and a one-line report.
+void writeSummary(const std::string& dataset, const std::string& out, std::size_t num_frames,
+                  std::size_t num_keyframes, const sds::loop::PlaceRecognizer& recognizer,
+                  const std::vector<sds::io::StampedPose>& truth, bool undistorted,
+                  const DetectionTally& tally) {
+  const nlohmann::json summary = {
+      {"dataset", dataset},
+      {"frames", num_frames},
+      {"keyframes", num_keyframes},
+      {"vocabulary_words", recognizer.vocabularyReady() ? recognizer.vocabulary()->numWords() : 0},
+      {"loops_accepted", tally.loops.size()},
+      {"loops_true", tally.true_loops},
+      {"loops_false", tally.false_loops},
+      {"ground_truth", !truth.empty()},
+      {"undistorted", undistorted},
+      {"extract_ms_median", percentile(tally.extract_ms, 0.5)},
+      {"query_ms_median", percentile(tally.query_ms, 0.5)},
+      {"query_ms_p95", percentile(tally.query_ms, 0.95)},
+      {"loops", tally.loops}};
+  std::ofstream(out + "/loops.json") << summary.dump(2) << "\n";
+  std::printf(
+      "%zu keyframes of %zu frames: %zu loops accepted (%d true, %d false%s); query %.2f ms "
+      "median, %.2f ms p95; extraction %.1f ms median\n",
+      num_keyframes, num_frames, tally.loops.size(), tally.true_loops, tally.false_loops,
+      truth.empty() ? ", no ground truth" : "", percentile(tally.query_ms, 0.5),
+      percentile(tally.query_ms, 0.95), percentile(tally.extract_ms, 0.5));
+}
+
 int run(const sds::io::CommandLine& cl) {
   cl.rejectUnknownFlags({"out", "config", "vocabulary", "calib", "every", "keyframe-distance",
                          "keyframe-angle", "true-distance", "true-angle"});
@@ -142,99 +248,34 @@ int run(const sds::io::CommandLine& cl) {
   const double true_angle = cl.number("true-angle", 30.0);
 
   const std::vector<Frame> frames = readFrameList(dataset);
-  std::vector<sds::io::StampedPose> truth;
-  if (std::ifstream(dataset + "/groundtruth.txt")) {
-    truth = sds::io::loadTrajectory(dataset + "/groundtruth.txt");
-    std::sort(truth.begin(), truth.end(),
-              [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
-  }
+  const std::vector<sds::io::StampedPose> truth = loadTruth(dataset);
   const std::vector<std::size_t> keyframes = pickKeyframes(frames, truth, cl);
   std::filesystem::create_directories(out);
 
-  std::unique_ptr<sds::geometry::CameraModel> camera;
-  const std::string calib = cl.text("calib", dataset + "/camera.yaml");
-  if (cl.has("calib") || std::ifstream(calib)) {
-    camera = sds::geometry::makeCameraModel(sds::io::loadCalibrationYaml(calib));
-  }
+  const std::unique_ptr<sds::geometry::CameraModel> camera = openCamera(cl, dataset);
   sds::loop::PlaceRecognizer recognizer(params);
   sds::loop::AppearanceExtractor extractor(params.appearance);
   std::ofstream queries(out + "/queries.txt");
-  nlohmann::json loops = nlohmann::json::array();
-  std::vector<double> extract_ms;
-  std::vector<double> query_ms;
-  int true_loops = 0;
-  int false_loops = 0;
+  DetectionTally tally;
   for (std::size_t k : keyframes) {
     const cv::Mat image = cv::imread(frames[k].path, cv::IMREAD_GRAYSCALE);
     if (image.empty()) throw std::runtime_error("cannot read image " + frames[k].path);
     sds::common::Stopwatch stage;
     sds::loop::KeyframeAppearance appearance = extractor.extract(image, camera.get());
-    extract_ms.push_back(stage.lapMs());
+    tally.extract_ms.push_back(stage.lapMs());
     const auto id = static_cast<sds::map::KeyframeId>(k);
     const sds::loop::PlaceQueryResult result =
         recognizer.query(id, frames[k].timestamp, appearance);
-    query_ms.push_back(stage.lapMs());
+    tally.query_ms.push_back(stage.lapMs());
     recognizer.add(id, frames[k].timestamp, std::move(appearance));
-    queries << result.describe() << "\n";
-    for (const sds::loop::LoopCandidate& c : result.candidates) {
-      char line[256];
-      std::snprintf(line, sizeof(line),
-                    "  candidate %u: normalised %.2f, %d matches, %d inliers (%s), coverage %.2f, "
-                    "scale change %.2f, %d consecutive: %s",
-                    c.keyframe_id, c.normalized_score, c.geometry.matches, c.geometry.inliers,
-                    c.geometry.model.empty() ? "-" : c.geometry.model.c_str(), c.geometry.coverage,
-                    c.geometry.scale_change, c.consistent_queries, sds::loop::toString(c.status));
-      queries << line << (c.reason.empty() ? "" : ": " + c.reason) << "\n";
-    }
+    logQuery(result, queries);
     const sds::loop::LoopCandidate* loop = result.accepted();
     if (loop == nullptr) continue;
-    nlohmann::json entry = {{"query_id", id},
-                            {"query_time", frames[k].timestamp},
-                            {"match_id", loop->keyframe_id},
-                            {"match_time", frames[loop->keyframe_id].timestamp},
-                            {"score", loop->score},
-                            {"normalized_score", loop->normalized_score},
-                            {"matches", loop->geometry.matches},
-                            {"inliers", loop->geometry.inliers},
-                            {"coverage", loop->geometry.coverage},
-                            {"scale_change", loop->geometry.scale_change},
-                            {"model", loop->geometry.model},
-                            {"consistent_queries", loop->consistent_queries}};
-    const auto* a = truth.empty() ? nullptr : poseAt(truth, frames[k].timestamp);
-    const auto* b = truth.empty() ? nullptr : poseAt(truth, frames[loop->keyframe_id].timestamp);
-    if (a != nullptr && b != nullptr) {
-      const double d = (a->T_world_cam.translation() - b->T_world_cam.translation()).norm();
-      const double angle = angleDeg(a->T_world_cam, b->T_world_cam);
-      const bool correct = d <= true_distance && angle <= true_angle;
-      (correct ? true_loops : false_loops) += 1;
-      entry["true_distance"] = d;
-      entry["true_angle_deg"] = angle;
-      entry["correct"] = correct;
-    }
-    loops.push_back(entry);
+    tally.loops.push_back(loopEntry(frames, k, *loop, truth, true_distance, true_angle, &tally));
     std::cout << result.describe() << "\n";
   }
-  const nlohmann::json summary = {
-      {"dataset", dataset},
-      {"frames", frames.size()},
-      {"keyframes", keyframes.size()},
-      {"vocabulary_words", recognizer.vocabularyReady() ? recognizer.vocabulary()->numWords() : 0},
-      {"loops_accepted", loops.size()},
-      {"loops_true", true_loops},
-      {"loops_false", false_loops},
-      {"ground_truth", !truth.empty()},
-      {"undistorted", camera != nullptr},
-      {"extract_ms_median", percentile(extract_ms, 0.5)},
-      {"query_ms_median", percentile(query_ms, 0.5)},
-      {"query_ms_p95", percentile(query_ms, 0.95)},
-      {"loops", loops}};
-  std::ofstream(out + "/loops.json") << summary.dump(2) << "\n";
-  std::printf(
-      "%zu keyframes of %zu frames: %zu loops accepted (%d true, %d false%s); query %.2f ms "
-      "median, %.2f ms p95; extraction %.1f ms median\n",
-      keyframes.size(), frames.size(), loops.size(), true_loops, false_loops,
-      truth.empty() ? ", no ground truth" : "", percentile(query_ms, 0.5),
-      percentile(query_ms, 0.95), percentile(extract_ms, 0.5));
+  writeSummary(dataset, out, frames.size(), keyframes.size(), recognizer, truth, camera != nullptr,
+               tally);
   return 0;
 }
 

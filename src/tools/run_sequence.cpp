@@ -13,6 +13,10 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -182,109 +186,157 @@ void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameRe
         << ',' << candidates << ',' << r.relocalised << ",\"" << message << "\"\n";
 }
 
-int run(const io::CommandLine& args) {
-  const common::Stopwatch timer;
+/// What run_sequence was asked to do.
+struct RunOptions {
+  std::string dataset;
+  fs::path out;
+  long max_frames = -1;  // -1: all
+  bool quiet = false;
+  system::SlamParams params;
+};
+
+RunOptions parseOptions(const io::CommandLine& args) {
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
                            "quiet", "se3", "no-loop-closure"});
-  const std::string dataset = args.positional(0, "DATASET");
-  const fs::path out = args.required("out");
-  const long max_frames = args.integer("max-frames", -1);
-  const bool quiet = args.has("quiet");
-  system::SlamParams params;
+  RunOptions options;
+  options.dataset = args.positional(0, "DATASET");
+  options.out = args.required("out");
+  options.max_frames = args.integer("max-frames", -1);
+  options.quiet = args.has("quiet");
+  system::SlamParams& params = options.params;
   if (args.has("config")) params = io::loadSlamParams(args.required("config"));
   if (args.has("se3")) params.mapper.loop_correction.graph.mode = loop::PoseGraphMode::kSE3;
   if (args.has("no-loop-closure")) params.loop.enabled = false;
-  std::unique_ptr<io::ImageSequence> sequence = openDataset(args, dataset);
-  geometry::CameraCalibration calibration;
-  if (args.has("calib")) {
-    calibration = io::loadCalibrationYaml(args.required("calib"));
-  } else if (sequence->calibration()) {
-    calibration = *sequence->calibration();
-  } else {
-    throw std::invalid_argument("'" + dataset + "' has no calibration of its own: pass --calib");
-  }
-  fs::create_directories(out);
-  cv::setNumThreads(1);  // one core for tracking; the mapping thread is the second
-  if (!quiet) std::cout << "# parameters\n" << io::formatSlamParams(params);
-  std::cout << "dataset: " << dataset << " (" << sequence->describe() << ")\n"
-            << "camera: " << calibration.describe() << "\n";
-  system::SlamSystem slam(geometry::makeCameraModel(calibration), params);
-  const double startup_ms = timer.ms();
+  return options;
+}
 
-  std::vector<io::StampedPose> trajectory;
-  std::ofstream frame_log = openFrameLog(out / "frames.csv");
+/// --calib, else the dataset's own calibration.
+geometry::CameraCalibration calibrationOf(const io::CommandLine& args, const std::string& dataset,
+                                          const io::ImageSequence& sequence) {
+  if (args.has("calib")) return io::loadCalibrationYaml(args.required("calib"));
+  if (sequence.calibration()) return *sequence.calibration();
+  throw std::invalid_argument("'" + dataset + "' has no calibration of its own: pass --calib");
+}
+
+/// What the frame loop gathered.
+struct RunTally {
+  std::vector<io::StampedPose> trajectory;  // as output live
   io::StageTimings timings;
   std::map<std::string, int> states;
-  int frames = 0, rejected = 0;
+  int frames = 0;
+  int rejected = 0;
+};
+
+/// Feeds the frames to the SLAM, logging each to frames.csv; finishes the background threads.
+RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
+                       system::SlamSystem& slam) {
+  RunTally tally;
+  std::ofstream frame_log = openFrameLog(options.out / "frames.csv");
+  const long max_frames = options.max_frames;
   const std::size_t total =
-      max_frames >= 0 ? std::min<std::size_t>(max_frames, sequence->size()) : sequence->size();
-  const bool progress = !quiet && isatty(STDERR_FILENO);
-  while (max_frames < 0 || frames < max_frames) {
-    const std::optional<io::SequenceFrame> frame = sequence->next();
+      max_frames >= 0 ? std::min<std::size_t>(max_frames, sequence.size()) : sequence.size();
+  const bool progress = !options.quiet && isatty(STDERR_FILENO);
+  while (max_frames < 0 || tally.frames < max_frames) {
+    const std::optional<io::SequenceFrame> frame = sequence.next();
     if (!frame) break;
-    ++frames;
+    ++tally.frames;
     const common::Stopwatch frame_timer;
     const tracking::FrameResult r = processOne(slam, *frame);
     // What the camera sees: the whole call, with map updates applied (and the window BA when
     // the mapper runs inline).
     const double frame_ms = frame_timer.ms();
     if (r.rejected) {
-      ++rejected;
+      ++tally.rejected;
       std::cerr << (progress ? "\n" : "") << frame->source << ": " << r.message << "\n";
     } else {
-      ++states[trackingStateName(r.state)];
-      addTimes(r, &timings);
-      if (r.state != tracking::TrackingState::kInitializing) timings.add("frame", frame_ms);
+      ++tally.states[trackingStateName(r.state)];
+      addTimes(r, &tally.timings);
+      if (r.state != tracking::TrackingState::kInitializing) tally.timings.add("frame", frame_ms);
     }
-    if (r.has_pose) trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
-    logFrame(frames - 1, *frame, r, slam.tracker().numCandidates(), &frame_log);
+    if (r.has_pose) tally.trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
+    logFrame(tally.frames - 1, *frame, r, slam.tracker().numCandidates(), &frame_log);
     for (const std::string& line : slam.takeLog())
       std::cout << (progress ? "\n" : "") << line << "\n";
-    if (progress && (frames % 10 == 0 || frames == static_cast<int>(total))) {
-      printProgress(frames, total, r);
+    if (progress && (tally.frames % 10 == 0 || tally.frames == static_cast<int>(total))) {
+      printProgress(tally.frames, total, r);
     }
   }
   if (progress) std::fprintf(stderr, "\n");
   slam.finish();
   for (const std::string& line : slam.takeLog())
     std::cout << line << "\n";
-  addBackgroundTimes(slam, &timings);
+  addBackgroundTimes(slam, &tally.timings);
+  return tally;
+}
 
+/// trajectory.txt, trajectory_as_tracked.txt and keyframes.txt.
+void writeTrajectories(const RunOptions& options, const system::SlamSystem& slam,
+                       const RunTally& tally) {
+  const fs::path& out = options.out;
+  const std::string& dataset = options.dataset;
   io::saveTumTrajectory((out / "trajectory.txt").string(), correctedTrajectory(slam),
                         "every tracked frame corrected by the loop closures, T_world_cam, "
                         "run_sequence " +
                             dataset);
-  io::saveTumTrajectory((out / "trajectory_as_tracked.txt").string(), trajectory,
+  io::saveTumTrajectory((out / "trajectory_as_tracked.txt").string(), tally.trajectory,
                         "every tracked frame as output live, T_world_cam, run_sequence " + dataset);
   io::saveTumTrajectory((out / "keyframes.txt").string(), keyframePoses(slam.map()),
                         "keyframes after the last window BA, T_world_cam");
-  const double peak_mib = io::peakMemoryMiB();
+}
+
+void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
+                      const RunTally& tally, double startup_ms, double peak_mib) {
+  const std::string& dataset = options.dataset;
   const nlohmann::json summary = {{"dataset", dataset},
-                                  {"frames", frames},
-                                  {"rejected_frames", rejected},
-                                  {"tracked", trajectory.size()},
-                                  {"states", states},
+                                  {"frames", tally.frames},
+                                  {"rejected_frames", tally.rejected},
+                                  {"tracked", tally.trajectory.size()},
+                                  {"states", tally.states},
                                   {"keyframes", slam.map().numKeyframes()},
                                   {"points", slam.map().numPoints()},
                                   {"observations", slam.map().numObservations()},
                                   {"loops", loopsJson(slam)},
                                   {"relocalisations", slam.relocalisations()},
                                   {"map_restarts", slam.mapRestarts()},
-                                  {"timing", timings.toJson()},
+                                  {"timing", tally.timings.toJson()},
                                   {"startup_ms", startup_ms},
                                   {"peak_memory_mib", peak_mib}};
-  std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
-  std::cout << "frames " << frames << ", tracked " << trajectory.size() << ", rejected " << rejected
-            << "; states:";
-  for (const auto& [state, count] : states)
+  std::ofstream(options.out / "summary.json") << summary.dump(2) << "\n";
+}
+
+void printSummary(const RunOptions& options, const system::SlamSystem& slam, const RunTally& tally,
+                  double startup_ms, double peak_mib) {
+  std::cout << "frames " << tally.frames << ", tracked " << tally.trajectory.size() << ", rejected "
+            << tally.rejected << "; states:";
+  for (const auto& [state, count] : tally.states)
     std::cout << " " << state << " " << count;
   std::cout << "\nloops closed: " << loopsJson(slam).size()
             << ", relocalisations: " << slam.relocalisations()
             << ", young maps discarded: " << slam.mapRestarts();
   std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
             << " points, " << slam.map().numObservations() << " observations\n"
-            << timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
-            << " MiB\noutputs in " << out.string() << "\n";
+            << tally.timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
+            << " MiB\noutputs in " << options.out.string() << "\n";
+}
+
+int run(const io::CommandLine& args) {
+  const common::Stopwatch timer;
+  const RunOptions options = parseOptions(args);
+  std::unique_ptr<io::ImageSequence> sequence = openDataset(args, options.dataset);
+  const geometry::CameraCalibration calibration = calibrationOf(args, options.dataset, *sequence);
+  fs::create_directories(options.out);
+  cv::setNumThreads(1);  // one core for tracking; the mapping thread is the second
+  if (!options.quiet) std::cout << "# parameters\n" << io::formatSlamParams(options.params);
+  std::cout << "dataset: " << options.dataset << " (" << sequence->describe() << ")\n"
+            << "camera: " << calibration.describe() << "\n";
+  system::SlamSystem slam(geometry::makeCameraModel(calibration), options.params);
+  const double startup_ms = timer.ms();
+
+  const RunTally tally = trackSequence(options, *sequence, slam);
+  writeTrajectories(options, slam, tally);
+  const double peak_mib = io::peakMemoryMiB();
+  writeSummaryJson(options, slam, tally, startup_ms, peak_mib);
+  printSummary(options, slam, tally, startup_ms, peak_mib);
   return 0;
 }
 

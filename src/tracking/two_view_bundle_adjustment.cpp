@@ -1,40 +1,15 @@
-// Two-view bundle adjustment for map initialisation (declared in two_view_reconstruction.h).
+// Two-view bundle adjustment for map initialisation (declared in two_view_reconstruction.h), with
+// the shared reprojection cost of the window BA (features/reprojection_cost.h).
+
+#include <array>
+#include <deque>
 
 #include <ceres/ceres.h>
-#include <ceres/rotation.h>
 
+#include "scale_drift_slam/features/reprojection_cost.h"
 #include "scale_drift_slam/tracking/two_view_reconstruction.h"
 
 namespace scale_drift_slam::tracking {
-namespace {
-
-/// r = focal (proj(R p + t) - xy), proj(a) = (a1/a3, a2/a3) (doc/algorithm.md, "Notation");
-/// R from the quaternion (x y z w, Eigen order), or the identity for the fixed first camera.
-struct ReprojectionResidual {
-  ReprojectionResidual(const Eigen::Vector2d& xy, double focal) : xy_(xy), focal_(focal) {}
-
-  template <typename T>
-  bool operator()(const T* q, const T* t, const T* p, T* residual) const {
-    const Eigen::Quaternion<T> rotation(q[3], q[0], q[1], q[2]);
-    const Eigen::Matrix<T, 3, 1> point(p[0], p[1], p[2]);
-    const Eigen::Matrix<T, 3, 1> x = rotation * point + Eigen::Matrix<T, 3, 1>(t[0], t[1], t[2]);
-    residual[0] = T(focal_) * (x[0] / x[2] - T(xy_.x()));
-    residual[1] = T(focal_) * (x[1] / x[2] - T(xy_.y()));
-    return true;
-  }
-
-  template <typename T>
-  bool operator()(const T* p, T* residual) const {
-    residual[0] = T(focal_) * (p[0] / p[2] - T(xy_.x()));
-    residual[1] = T(focal_) * (p[1] / p[2] - T(xy_.y()));
-    return true;
-  }
-
-  Eigen::Vector2d xy_;
-  double focal_;
-};
-
-}  // namespace
 
 void bundleAdjustTwoView(const std::vector<Eigen::Vector2d>& xy_first,
                          const std::vector<Eigen::Vector2d>& xy_second,
@@ -42,35 +17,36 @@ void bundleAdjustTwoView(const std::vector<Eigen::Vector2d>& xy_first,
                          int max_iterations, geometry::SE3* T_second_first,
                          std::vector<Eigen::Vector3d>* points_first) {
   if (max_iterations <= 0) return;
-  double q[4] = {T_second_first->rotation().x(), T_second_first->rotation().y(),
-                 T_second_first->rotation().z(), T_second_first->rotation().w()};
   const double baseline = T_second_first->translation().norm();
   if (!(baseline > 0.0)) return;
-  double t[3] = {T_second_first->translation().x(), T_second_first->translation().y(),
-                 T_second_first->translation().z()};
+  // Poses as features::ReprojectionCost takes them (7 numbers, SE3::toData): the first camera is
+  // the world origin, held constant; the second moves on the SE(3) manifold.
+  std::array<double, 7> T_first_first{}, T_second_first_data{};
+  geometry::SE3().toData(T_first_first.data());
+  T_second_first->toData(T_second_first_data.data());
+
+  // The problem borrows costs, kernel and manifold: they live on this stack frame.
   ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  // Pseudo-Huber: Ceres' SoftLOneLoss(b) is rho(s) = 2 b^2 (sqrt(1 + s / b^2) - 1) of the squared
-  // residual s = r^2 (ceres/loss_function.h), the paper's kernel; Ceres minimises 1/2 sum rho.
-  ceres::LossFunction* loss = new ceres::SoftLOneLoss(huber_px);
+  ceres::SoftLOneLoss pseudo_huber(huber_px);  // see features::pseudoHuber
+  features::SE3LeftManifold se3_manifold;
+  std::deque<features::ReprojectionCost> costs;  // stable addresses, no copies
   int used = 0;
   for (std::size_t i = 0; i < use.size(); ++i) {
     if (!use[i]) continue;
     double* p = (*points_first)[i].data();
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 3>(
-                                 new ReprojectionResidual(xy_first[i], focal_px)),
-                             loss, p);
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ReprojectionResidual, 2, 4, 3, 3>(
-                                 new ReprojectionResidual(xy_second[i], focal_px)),
-                             loss, q, t, p);
+    costs.emplace_back(xy_first[i], focal_px);
+    problem.AddResidualBlock(&costs.back(), &pseudo_huber, T_first_first.data(), p);
+    costs.emplace_back(xy_second[i], focal_px);
+    problem.AddResidualBlock(&costs.back(), &pseudo_huber, T_second_first_data.data(), p);
     ++used;
   }
   if (used < 5) return;
-  problem.SetManifold(q, new ceres::EigenQuaternionManifold);
-  // The baseline length is the scale gauge of two views: keep |t| fixed on its sphere.
-  problem.SetManifold(t, new ceres::SphereManifold<3>);
+  problem.SetParameterBlockConstant(T_first_first.data());
+  problem.SetManifold(T_second_first_data.data(), &se3_manifold);
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_SCHUR;
   options.max_num_iterations = max_iterations;
@@ -78,8 +54,18 @@ void bundleAdjustTwoView(const std::vector<Eigen::Vector2d>& xy_first,
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  *T_second_first =
-      geometry::SE3(Eigen::Quaterniond(q[3], q[0], q[1], q[2]), Eigen::Vector3d(t[0], t[1], t[2]));
+
+  // The scale of two views is a gauge the cost does not see (scaling the baseline and all points
+  // together changes no residual), and the SE(3) manifold leaves it free: the solution is scaled
+  // back to the baseline it started with, as the fixed-length baseline of a sphere would keep it.
+  const geometry::SE3 T = geometry::SE3::fromData(T_second_first_data.data());
+  const double length = T.translation().norm();
+  if (!(length > 0.0) || !std::isfinite(length)) return;
+  const double scale = baseline / length;
+  *T_second_first = geometry::SE3(T.rotation(), T.translation() * scale);
+  for (std::size_t i = 0; i < use.size(); ++i) {
+    if (use[i]) (*points_first)[i] *= scale;
+  }
 }
 
 }  // namespace scale_drift_slam::tracking

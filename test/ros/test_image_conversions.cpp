@@ -1,7 +1,9 @@
-// Camera images of every common encoding arrive as the tracker expects them, compressed images
+// Camera images of every common encoding arrive as the tracker expects them (bayer and yuv422
+// converted to grey by cv_bridge, the others shared with the message), compressed images
 // are decoded, and anything else is refused with a reason that names the encoding.
 
 #include <gtest/gtest.h>
+#include <boost/make_shared.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -61,7 +63,7 @@ TEST(ImageConversions, CommonEncodingsGiveTheSameGreyImage) {
 
 TEST(ImageConversions, OtherEncodingsAndBadDataAreRefusedWithTheReason) {
   const cv::Mat grey = greyPattern();
-  for (const std::string encoding : {"32FC1", "bayer_rggb8", "yuv422", ""}) {
+  for (const std::string encoding : {"32FC1", "bayer_rggb16", "yuv422_yuy2", "nv21", ""}) {
     try {
       cameraImageFromMsg(messageOf(grey, encoding));
       FAIL() << encoding << " accepted";
@@ -76,6 +78,50 @@ TEST(ImageConversions, OtherEncodingsAndBadDataAreRefusedWithTheReason) {
   sensor_msgs::Image short_step = messageOf(grey, "bgr8");  // 1 byte per pixel announced as 3
   EXPECT_THROW(cameraImageFromMsg(short_step), std::invalid_argument);
   EXPECT_THROW(cameraImageFromMsg(sensor_msgs::Image()), std::invalid_argument);
+}
+
+TEST(ImageConversions, BayerAndYuv422AreConvertedToGreyByCvBridge) {
+  // A flat colour: every Bayer cell and every UYVY pixel pair gives the same grey level.
+  cv::Mat bayer(30, 40, CV_8UC1);
+  for (int y = 0; y < bayer.rows; ++y) {
+    for (int x = 0; x < bayer.cols; ++x)  // RGGB: R at (even, even), B at (odd, odd), G else
+      bayer.at<std::uint8_t>(y, x) = y % 2 == 0 && x % 2 == 0 ? 200 : y % 2 && x % 2 ? 40 : 120;
+  }
+  const CameraImage from_bayer = cameraImageFromMsg(messageOf(bayer, "bayer_rggb8", 2));
+  EXPECT_EQ(from_bayer.encoding, features::PixelEncoding::kMono8);
+  ASSERT_EQ(from_bayer.image.type(), CV_8UC1);
+  ASSERT_EQ(from_bayer.image.size(), bayer.size());
+  const cv::Rect inner(2, 2, bayer.cols - 4, bayer.rows - 4);  // demosaicing borders differ
+  double low, high;
+  cv::minMaxLoc(from_bayer.image(inner), &low, &high);
+  EXPECT_LE(high - low, 1.0);
+  EXPECT_NEAR(low, 0.299 * 200 + 0.587 * 120 + 0.114 * 40, 2.0);  // the luma of (200, 120, 40)
+
+  cv::Mat uyvy(30, 40, CV_8UC2);
+  const cv::Mat luma = greyPattern();
+  for (int y = 0; y < uyvy.rows; ++y) {
+    for (int x = 0; x < uyvy.cols; ++x)  // U Y0 V Y1: chroma, then the pixel's luma
+      uyvy.at<cv::Vec2b>(y, x) = {static_cast<std::uint8_t>(x % 2 ? 140 : 110),
+                                  luma.at<std::uint8_t>(y, x)};
+  }
+  const CameraImage from_yuv = cameraImageFromMsg(messageOf(uyvy, "yuv422"));
+  EXPECT_EQ(from_yuv.encoding, features::PixelEncoding::kMono8);
+  EXPECT_EQ(cv::norm(from_yuv.image, luma, cv::NORM_INF), 0.0);  // the Y plane as it is
+
+  sensor_msgs::Image truncated = messageOf(uyvy, "yuv422");
+  truncated.data.resize(truncated.data.size() / 2);
+  EXPECT_THROW(cameraImageFromMsg(truncated), std::invalid_argument);
+}
+
+TEST(ImageConversions, SharedPointerMessagesAreNotCopied) {
+  const cv::Mat grey = greyPattern();
+  const auto msg = boost::make_shared<sensor_msgs::Image>(messageOf(grey, "mono8", 3));
+  CameraImage image = cameraImageFromMsg(sensor_msgs::ImageConstPtr(msg));
+  EXPECT_EQ(image.image.data, msg->data.data());
+  EXPECT_EQ(cv::norm(image.image, grey, cv::NORM_INF), 0.0);
+  // The image keeps the message alive; a message passed by reference is copied.
+  EXPECT_TRUE(image.owner);
+  EXPECT_NE(cameraImageFromMsg(*msg).image.data, msg->data.data());
 }
 
 TEST(ImageConversions, CompressedImagesAreDecoded) {

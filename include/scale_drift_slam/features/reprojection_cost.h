@@ -1,7 +1,8 @@
 #pragma once
-// Internal to src/mapping: the Ceres pieces shared by the window BA and the Ceres variant of
-// motion-only BA. Residuals are analytic (autodiff costs ~10x more per observation, and the
-// window BA must stay under 30 ms for 10000 observations, doc/benchmarks.md).
+// The Ceres pieces shared by the window BA, the Ceres variant of motion-only BA and the two-view
+// BA of map initialisation: the one reprojection residual of the package. Residuals are analytic
+// (autodiff costs ~10x more per observation, and the window BA must stay under 30 ms for 10000
+// observations, doc/benchmarks.md).
 
 #include <ceres/ceres.h>
 

@@ -29,6 +29,11 @@ scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe);
 /// problem: an image other than mono8, data smaller than the image, a non-finite pose or point.
 /// With `image_problem`, an unusable image does not throw: the keyframe comes without it and the
 /// reason is written there (empty when the image was fine or absent).
+/// The keyframe as the tracking node sends it: toKeyframeMsg addressed (session, mapper id, map
+/// version) and with the camera, stamped as the keyframe.
+scale_drift_slam::Keyframe toKeyframeMsg(const map::KeyframeMessage& keyframe,
+                                         const system::Envelope& address,
+                                         const sensor_msgs::CameraInfo& camera);
 map::KeyframeMessage fromKeyframeMsg(const scale_drift_slam::Keyframe& msg,
                                      std::string* image_problem = nullptr);
 
@@ -82,5 +87,13 @@ inline void setEnvelope(const system::Envelope& from, scale_drift_slam::Sim3Cons
 
 /// The frame's verdict; header, session, map sizes and map version are the caller's.
 scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result);
+/// The tracking node's full status of a frame: the verdict, the tracker's map sizes and the
+/// address of its map (`map_address`: session and map version in the mapper's numbering), stamped
+/// with the image's time in `frame_id` (the camera's optical frame).
+scale_drift_slam::TrackingStatus toTrackingStatusMsg(const tracking::FrameResult& result,
+                                                     const tracking::Tracker& tracker,
+                                                     const system::Envelope& map_address,
+                                                     const ros::Time& stamp,
+                                                     const std::string& frame_id);
 
 }  // namespace scale_drift_slam::ros_conversions

@@ -18,6 +18,7 @@
 #include "scale_drift_slam/geometry/se3.h"
 #include "scale_drift_slam/map/corrected_trajectory.h"
 #include "scale_drift_slam/map/map.h"
+#include "scale_drift_slam/ros/image_conversions.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::ros_conversions {
@@ -70,5 +71,8 @@ visualization_msgs::MarkerArray deleteAllMarkers(const std_msgs::Header& header)
 /// A colour image of the frame: the grey frame with the tracked map points (green circles) and a
 /// line of text (state, inliers, matches, time, message).
 cv::Mat debugImage(const cv::Mat& grey, const tracking::FrameResult& result);
+/// The debug image of a frame as a bgr8 message: the header's stamp in `frame_id`.
+sensor_msgs::Image debugImageMsg(const CameraImage& image, const tracking::FrameResult& result,
+                                 const std_msgs::Header& header, const std::string& frame_id);
 
 }  // namespace scale_drift_slam::ros_conversions

@@ -66,10 +66,10 @@ Eigen::Vector3d triangulateTwoView(const Eigen::Vector2d& xy_first,
 /// The parallax angle (degrees) between the two rays that meet at p_first.
 double parallaxDeg(const Eigen::Vector3d& p_first, const geometry::SE3& T_second_first);
 
-/// Two-view bundle adjustment (Ceres, pseudo-Huber with b = huber_px pixels): refines the second
-/// pose and the points marked in `use`, the first camera fixed at the identity and the baseline
-/// |t| held at its value (the scale gauge). Residuals are normalised-coordinate errors times
-/// `focal_px`.
+/// Two-view bundle adjustment (Ceres, features::ReprojectionCost, pseudo-Huber with b = huber_px
+/// pixels): refines the second pose and the points marked in `use`, the first camera fixed at the
+/// identity and the baseline |t| kept at its value (the scale gauge: the solution is scaled back
+/// to it). Residuals are normalised-coordinate errors times `focal_px`.
 void bundleAdjustTwoView(const std::vector<Eigen::Vector2d>& xy_first,
                          const std::vector<Eigen::Vector2d>& xy_second,
                          const std::vector<bool>& use, double focal_px, double huber_px,

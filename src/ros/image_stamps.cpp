@@ -1,0 +1,18 @@
+#include "scale_drift_slam/ros/image_stamps.h"
+
+namespace scale_drift_slam::ros_conversions {
+
+ImageStampCheck checkImageStamp(const ros::Time& last_stamp, const ros::Time& stamp) {
+  ImageStampCheck check;
+  if (last_stamp.isZero() || stamp > last_stamp) return check;
+  if (stamp == last_stamp) {
+    check.duplicate = true;
+  } else {
+    check.restart_reason = "image time jumped backwards from " +
+                           std::to_string(last_stamp.toSec()) + " to " +
+                           std::to_string(stamp.toSec()) + " s (bag restarted?)";
+  }
+  return check;
+}
+
+}  // namespace scale_drift_slam::ros_conversions
