@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "keyframe_admission.h"
+
 namespace scale_drift_slam::system {
 
 LoopCloserEndpoint::LoopCloserEndpoint(loop::LoopCloserParams params) : params_(std::move(params)) {
@@ -13,19 +15,9 @@ LoopCloserEndpoint::KeyframeOutcome LoopCloserEndpoint::addKeyframe(const Envelo
                                                                     const CameraSource& camera) {
   KeyframeOutcome outcome;
   const map::KeyframeId id = keyframe.keyframe.id;
-  if (!keyframe.keyframe.T_kf_world.matrix().allFinite()) {
-    outcome.refusal = "keyframe " + std::to_string(id) + " has a non-finite pose";
-    return outcome;
-  }
-  if (!isCurrent(from.session) && closer_ && id != 0) {
-    // A new tracker session begins with keyframe 0; anything else would throw away the
-    // loop closer's map for a message that cannot be the start of one (stray or forged).
-    outcome.refusal = "keyframe " + std::to_string(id) + " of tracker session " +
-                      std::to_string(from.session) +
-                      " does not begin a map: the loop closer's map of session " +
-                      std::to_string(session_) + " is kept";
-    return outcome;
-  }
+  outcome.refusal = internal::keyframeRefusal(from, keyframe.keyframe, closer_.has_value(),
+                                              session_, "loop closer's map");
+  if (!outcome.refusal.empty()) return outcome;
   if (!isCurrent(from.session)) {
     // A new session: the camera is checked before the old loop closer goes.
     std::shared_ptr<const geometry::CameraModel> model;

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <utility>
 
+#include "keyframe_admission.h"
+
 namespace scale_drift_slam::system {
 
 MapperEndpoint::MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id)
@@ -15,18 +17,9 @@ MapperEndpoint::KeyframeOutcome MapperEndpoint::addKeyframe(
     const std::function<double()>& focal_length_px) {
   KeyframeOutcome outcome;
   const map::KeyframeId id = keyframe.keyframe.id;
-  if (!keyframe.keyframe.T_kf_world.matrix().allFinite()) {
-    outcome.refusal = "keyframe " + std::to_string(id) + " has a non-finite pose";
-    return outcome;
-  }
-  if (!isCurrent(from.session) && mapper_ && id != 0) {
-    // A new tracker session begins with keyframe 0; anything else would throw away the
-    // map for a message that cannot be the start of one (stray or forged).
-    outcome.refusal = "keyframe " + std::to_string(id) + " of tracker session " +
-                      std::to_string(from.session) + " does not begin a map: the map of session " +
-                      std::to_string(session_) + " is kept";
-    return outcome;
-  }
+  outcome.refusal =
+      internal::keyframeRefusal(from, keyframe.keyframe, mapper_.has_value(), session_, "map");
+  if (!outcome.refusal.empty()) return outcome;
   if (!isCurrent(from.session)) {
     // A new map: everything that can refuse the keyframe is checked before the old one goes.
     double focal = 0.0;

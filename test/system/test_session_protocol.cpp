@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "../tracking/synthetic_images.h"
+
 #include "scale_drift_slam/system/loop_closer_endpoint.h"
 #include "scale_drift_slam/system/mapper_endpoint.h"
 #include "scale_drift_slam/system/tracker_inbox.h"
@@ -17,14 +19,7 @@ namespace scale_drift_slam::system {
 namespace {
 
 std::shared_ptr<const geometry::CameraModel> someCamera() {
-  geometry::CameraCalibration c;
-  c.fx = c.fy = 500.0;
-  c.cx = 320.0;
-  c.cy = 240.0;
-  c.width = 640;
-  c.height = 480;
-  c.distortion = {0.0, 0.0, 0.0, 0.0, 0.0};
-  return geometry::makeCameraModel(c);
+  return test::pinholeCamera(500.0);
 }
 
 double focal() {
