@@ -54,6 +54,7 @@ nlohmann::json toJson(const TrajectoryEvaluation& e) {
                                       {"scale", s.scale}});
   }
   json["scale_drift"] = e.scale_drift;
+  json["scale_drift_per_100m_percent"] = e.scale_drift_per_100m;
   return json;
 }
 
@@ -78,7 +79,8 @@ std::string summaryText(const TrajectoryEvaluation& e) {
     text += "scale per segment  ";
     for (const ScaleSegment& s : e.scale_segments)
       text += format(" %.4f", s.scale);
-    text += format("\nscale drift         %.4f (last segment / first)\n", e.scale_drift);
+    text += format("\nscale drift         %.4f (last segment / first), %+.2f %% per 100 m\n",
+                   e.scale_drift, e.scale_drift_per_100m);
   }
   return text;
 }

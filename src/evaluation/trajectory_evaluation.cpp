@@ -9,6 +9,26 @@
 namespace scale_drift_slam::evaluation {
 namespace {
 
+/// TrajectoryEvaluation::scale_drift_per_100m.
+double scaleDriftPer100m(const std::vector<ScaleSegment>& segments) {
+  if (segments.size() < 2) return 0.0;
+  double mean_d = 0.0, mean_s = 0.0;
+  for (const ScaleSegment& s : segments) {
+    mean_d += 0.5 * (s.start_distance + s.end_distance);
+    mean_s += std::log(s.scale);
+  }
+  mean_d /= segments.size();
+  mean_s /= segments.size();
+  double covariance = 0.0, spread = 0.0;
+  for (const ScaleSegment& s : segments) {
+    const double d = 0.5 * (s.start_distance + s.end_distance) - mean_d;
+    covariance += d * (std::log(s.scale) - mean_s);
+    spread += d * d;
+  }
+  if (!(spread > 0.0)) return 0.0;
+  return 100.0 * (std::exp(100.0 * covariance / spread) - 1.0);
+}
+
 geometry::Sim3 align(const std::vector<Eigen::Vector3d>& estimate,
                      const std::vector<Eigen::Vector3d>& truth, AlignmentMode mode) {
   if (mode == AlignmentMode::kSim3) return alignSim3(estimate, truth);
@@ -222,6 +242,7 @@ TrajectoryEvaluation evaluateTrajectory(std::vector<io::StampedPose> truth,
   if (!result.scale_segments.empty()) {
     result.scale_drift = result.scale_segments.back().scale / result.scale_segments.front().scale;
   }
+  result.scale_drift_per_100m = scaleDriftPer100m(result.scale_segments);
   return result;
 }
 

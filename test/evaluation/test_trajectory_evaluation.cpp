@@ -102,6 +102,26 @@ TEST(TrajectoryEvaluation, MeasuresScaleDriftPerSegment) {
   EXPECT_NEAR(e.scale_drift, 1.05 / 1.45, 0.01);
 }
 
+TEST(TrajectoryEvaluation, MeasuresTheScaleDriftPer100m) {
+  // The estimate's steps grow exponentially along the path, k(s) = exp(c s): after aligning the
+  // first segment, segment j's scale is exp(-c (middle_j - middle_0)), a straight line in log.
+  const auto truth = circle(1000);
+  std::vector<io::StampedPose> estimate = truth;
+  const double c = 0.002;  // per metre: -18.1 % per 100 m
+  double length = 0;
+  for (size_t i = 1; i < truth.size(); ++i) {
+    const Eigen::Vector3d step =
+        truth[i].T_world_cam.translation() - truth[i - 1].T_world_cam.translation();
+    const double k = std::exp(c * (length + 0.5 * step.norm()));
+    estimate[i].T_world_cam.translation() = estimate[i - 1].T_world_cam.translation() + k * step;
+    length += step.norm();
+  }
+  const TrajectoryEvaluation e = evaluateTrajectory(truth, estimate);
+  EXPECT_NEAR(e.scale_drift_per_100m, 100.0 * (std::exp(-100.0 * c) - 1.0), 0.5);
+  // No drift: 0.
+  EXPECT_NEAR(evaluateTrajectory(truth, truth).scale_drift_per_100m, 0.0, 1e-6);
+}
+
 TEST(TrajectoryEvaluation, MeasuresAKnownRotationDriftInTheRpe) {
   // Straight walk at 1 m/s; the estimate's heading turns at 2 deg/s, its positions are right.
   std::vector<io::StampedPose> truth, estimate;

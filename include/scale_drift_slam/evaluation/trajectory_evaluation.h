@@ -73,6 +73,10 @@ struct TrajectoryEvaluation {
   std::vector<RelativePoseError> rpe;  ///< Distances longer than the path are left out.
   std::vector<ScaleSegment> scale_segments;
   double scale_drift = 1;  ///< Scale of the last segment / scale of the first.
+  /// Scale drift per 100 m of the true path, in %: the least-squares slope b of log(scale)
+  /// against the segments' middle distances, as 100 (exp(100 b) - 1). 0 with fewer than two
+  /// segments.
+  double scale_drift_per_100m = 0;
 };
 
 /// Evaluates; throws std::invalid_argument for bad parameters and std::runtime_error when fewer
