@@ -138,22 +138,6 @@ def peak_memory_mib(time_log):
     return int(match.group(1)) / 1024.0 if match else None
 
 
-def drift_per_100m(segments):
-    """Scale drift per 100 m from the scale per tenth: the least-squares slope of log(scale)
-    against each segment's mid distance, as the percentage the scale changes over 100 m."""
-    points = [(0.5 * (s["start_distance"] + s["end_distance"]), math.log(s["scale"]))
-              for s in segments if s["scale"] > 0]
-    if len(points) < 3:
-        return None
-    mean_d = sum(d for d, _ in points) / len(points)
-    mean_s = sum(s for _, s in points) / len(points)
-    spread = sum((d - mean_d) ** 2 for d, _ in points)
-    if spread <= 0:
-        return None
-    slope = sum((d - mean_d) * (s - mean_s) for d, s in points) / spread
-    return 100.0 * (math.exp(100.0 * slope) - 1.0)
-
-
 def last_error_line(text):
     lines = [line.strip() for line in text.splitlines() if line.strip()]
     errors = [line for line in lines if "error" in line.lower()]
@@ -254,7 +238,8 @@ def evaluate(sequence, bin_dir, out):
     segments = evaluation.get("scale_segments", [])
     figures["scale_per_tenth"] = [s["scale"] for s in segments]
     figures["scale_last_over_first"] = evaluation.get("scale_drift")
-    figures["drift_percent_per_100m"] = (drift_per_100m(segments)
+    # evaluate_trajectory's least-squares slope of log(scale) over the tenths' middle distances.
+    figures["drift_percent_per_100m"] = (evaluation.get("scale_drift_per_100m_percent")
                                          if path_length >= MIN_PATH_FOR_DRIFT_M else None)
 
 
