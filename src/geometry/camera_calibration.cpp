@@ -77,4 +77,26 @@ std::string CameraCalibration::describe() const {
   return s.str();
 }
 
+bool CameraCalibration::sameCameraAs(const CameraCalibration& other, double tolerance_px) const {
+  if (model != other.model || width != other.width || height != other.height ||
+      distortion.size() != other.distortion.size()) {
+    return false;
+  }
+  // A change of the focal length by d moves the image's edge by d * (half width / f) pixels.
+  const double half = 0.5 * std::max(width, height);
+  const double f = std::max(meanFocalLength(), 1e-9);
+  if (std::abs(fx - other.fx) * half / f > tolerance_px ||
+      std::abs(fy - other.fy) * half / f > tolerance_px || std::abs(cx - other.cx) > tolerance_px ||
+      std::abs(cy - other.cy) > tolerance_px) {
+    return false;
+  }
+  const double half_diagonal = 0.5 * std::hypot(width, height);
+  for (std::size_t i = 0; i < distortion.size(); ++i) {
+    if (!(std::abs(distortion[i] - other.distortion[i]) * half_diagonal <= tolerance_px)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace scale_drift_slam::geometry

@@ -120,8 +120,8 @@ class TrackingNode {
           ros_conversions::calibrationFromCameraInfo(*msg);
       if (!camera_) {
         setCamera(calibration);
-      } else if (calibration.describe() != calibration_.describe()) {
-        ROS_WARN("the CameraInfo changed (%s)", calibration.describe().c_str());
+      } else if (!calibration.sameCameraAs(calibration_)) {  // jitter below 0.5 px is ignored
+        ROS_WARN("the CameraInfo changed (%s): tracking restarts", calibration.describe().c_str());
         setCamera(calibration);
       }
     } catch (const std::exception& e) {
@@ -145,10 +145,12 @@ class TrackingNode {
       return;
     }
     const ros_conversions::ImageStampCheck stamp_check =
-        ros_conversions::checkImageStamp(last_stamp_, header.stamp);
-    if (stamp_check.duplicate) {
-      ROS_WARN_THROTTLE(5, "dropping an image with the stamp of the previous one (%.6f)",
-                        header.stamp.toSec());
+        ros_conversions::checkImageStamp(last_stamp_, header.stamp, params_.time_jump_restart_s);
+    if (stamp_check.duplicate || !stamp_check.drop_reason.empty()) {
+      ROS_WARN_THROTTLE(5, "%s",
+                        stamp_check.duplicate
+                            ? "dropping an image with the stamp of the previous one"
+                            : stamp_check.drop_reason.c_str());
       return;
     }
     if (!stamp_check.restart_reason.empty()) resetTracker(stamp_check.restart_reason);

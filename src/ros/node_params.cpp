@@ -170,6 +170,8 @@ void TrackingNodeParams::validate() const {
   check(image_queue_size >= 1, "image_queue_size", "must be >= 1");
   check(path_publish_every >= 1, "path_publish_every", "must be >= 1");
   check(path_max_poses >= 1, "path_max_poses", "must be >= 1");
+  check(std::isfinite(time_jump_restart_s) && time_jump_restart_s >= 0.0, "time_jump_restart_s",
+        "must be >= 0");
   const std::vector<std::pair<std::string, std::string>> names = {
       {"map_frame", frames.map},
       {"odom_frame", frames.odom},
@@ -240,6 +242,7 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   reader.read("publish_optical_transform", &p.publish_optical_transform);
   reader.read("path_publish_every", &p.path_publish_every);
   reader.read("path_max_poses", &p.path_max_poses);
+  reader.read("time_jump_restart_s", &p.time_jump_restart_s);
   p.validate();
   config.slam = slamParams(private_params);
   if (!p.calibration_file.empty()) {
@@ -303,7 +306,8 @@ std::string describe(const TrackingNodeConfig& c) {
       << p.frames.camera << ", optical " << p.frames.optical << "\nmap_z_up: " << p.map_z_up
       << "\npublish_optical_transform: " << p.publish_optical_transform
       << "\npath_publish_every: " << p.path_publish_every
-      << "\npath_max_poses: " << p.path_max_poses << "\n# SLAM parameters\n"
+      << "\npath_max_poses: " << p.path_max_poses
+      << "\ntime_jump_restart_s: " << p.time_jump_restart_s << "\n# SLAM parameters\n"
       << io::formatSlamParams(c.slam);
   return out.str();
 }

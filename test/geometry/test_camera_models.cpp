@@ -184,5 +184,32 @@ TEST(CameraCalibration, InvalidCalibrationsAreRefusedWithAReason) {
   EXPECT_THROW(parseDistortionModel("rational_polynomial"), std::invalid_argument);
 }
 
+TEST(CameraCalibration, JitterIsTheSameCameraARealChangeIsNot) {
+  CameraCalibration a;
+  a.fx = 525.0;
+  a.fy = 525.0;
+  a.cx = 319.5;
+  a.cy = 239.5;
+  a.width = 640;
+  a.height = 480;
+  a.distortion = {0.26, -0.95, -0.005, 0.003, 1.16};
+  CameraCalibration jitter = a;  // a CameraInfo republished with 0.01 px of noise
+  jitter.fx += 0.01;
+  jitter.cy -= 0.01;
+  jitter.distortion[0] += 1e-6;
+  EXPECT_TRUE(a.sameCameraAs(jitter));
+  // Another calibration: each of these moves the image by more than half a pixel.
+  for (int change = 0; change < 5; ++change) {
+    CameraCalibration other = a;
+    if (change == 0) other.fx += 2.0;  // 2 px of focal length: 1.2 px at the image's edge
+    if (change == 1) other.cx += 1.0;
+    if (change == 2) other.distortion[0] += 0.01;
+    if (change == 3) other.width = 752;
+    if (change == 4) other.model = DistortionModel::kEquidistant;
+    if (change == 4) other.distortion = {0.0, 0.0, 0.0, 0.0};
+    EXPECT_FALSE(a.sameCameraAs(other)) << "change " << change;
+  }
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::geometry

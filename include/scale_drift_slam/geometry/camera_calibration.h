@@ -40,6 +40,11 @@ struct CameraCalibration {
   /// (fx + fy) / 2: pixels per unit of normalised image coordinates, for error thresholds and
   /// robust kernels given in pixels.
   double meanFocalLength() const { return 0.5 * (fx + fy); }
+  /// The same camera up to the jitter of a calibration republished with rounding or refined
+  /// online: same model and size, every pixel of the image mapped within `tolerance_px` (focal
+  /// lengths and principal point within tolerance_px over the half image; coefficients within
+  /// tolerance_px / half diagonal in pixels).
+  bool sameCameraAs(const CameraCalibration& other, double tolerance_px = 0.5) const;
 };
 
 }  // namespace scale_drift_slam::geometry

@@ -37,6 +37,9 @@ struct TrackingNodeParams {
   bool publish_optical_transform = true;  ///< Static camera -> optical transform.
   int path_publish_every = 5;             ///< Frames between nav_msgs/Path messages.
   int path_max_poses = 20000;             ///< Oldest poses are dropped beyond this.
+  /// An image stamped more than this before the previous one restarts tracking (a bag played
+  /// again); a smaller step back (a driver glitch) only drops the image.
+  double time_jump_restart_s = 1.0;
   void validate() const;
 };
 
