@@ -32,6 +32,13 @@ std::vector<cv::Point2f> FeatureCandidates::pixels() const {
   return px;
 }
 
+int FeatureCandidates::numCertain() const {
+  int n = 0;
+  for (const Candidate& c : candidates_)
+    n += c.filter.isCertain();
+  return n;
+}
+
 int FeatureCandidates::update(const std::vector<cv::Point2f>& tracked,
                               const std::vector<unsigned char>& ok,
                               const geometry::SE3& T_cur_world,

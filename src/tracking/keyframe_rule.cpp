@@ -19,6 +19,12 @@ void KeyframeRuleParams::validate() const {
   if (!(min_distance_fraction >= 0.0 && min_distance_fraction <= 1.0)) {
     throw std::invalid_argument("keyframe rule: min_distance_fraction must be in [0, 1]");
   }
+  if (min_certain_candidates < 0) {
+    throw std::invalid_argument("keyframe rule: min_certain_candidates must be >= 0");
+  }
+  if (!(max_view_turn_fraction >= 0.0) || !std::isfinite(max_view_turn_fraction)) {
+    throw std::invalid_argument("keyframe rule: max_view_turn_fraction must be >= 0");
+  }
 }
 
 double medianSceneDepth(const geometry::SE3& T_cam_world,
@@ -39,7 +45,7 @@ KeyframeDecision decideKeyframe(
     const Eigen::Vector3d& camera_centre_world,
     const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
     double scene_depth, const KeyframeRuleParams& params,
-    const std::optional<TrackedPoints>& tracked) {
+    const std::optional<TrackedPoints>& tracked, const std::optional<ViewDirections>& view) {
   params.validate();
   if (!(scene_depth > 0.0) || !std::isfinite(scene_depth)) {
     throw std::invalid_argument("keyframe rule: the scene depth must be positive and finite");
@@ -55,11 +61,32 @@ KeyframeDecision decideKeyframe(
     }
   }
   decision.drop = decision.distance > decision.threshold;
+  // Parallax for new points: the camera moved, or the new features' filters measured it (their
+  // depths are certain, at a fast pan after a few frames, long before the distance is reached).
+  const bool parallax = decision.distance > params.min_distance_fraction * decision.threshold ||
+                        (tracked && params.min_certain_candidates > 0 &&
+                         tracked->certain_candidates >= params.min_certain_candidates);
   if (!decision.drop && tracked && tracked->at_last_keyframe > 0) {
     decision.view_leaving_map =
-        tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe &&
-        decision.distance > params.min_distance_fraction * decision.threshold;
+        tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe && parallax;
     decision.drop = decision.view_leaving_map;
+  }
+  if (!decision.drop && view && params.max_view_turn_fraction > 0.0 && parallax) {
+    if (view->keyframes.size() != keyframe_centres.size()) {
+      throw std::invalid_argument("keyframe rule: one viewing direction per keyframe expected");
+    }
+    // A nearby keyframe looking elsewhere does not cover this view: when the camera pans, the
+    // map points leave the image within a few frames, and new ones are spawned and promoted only
+    // at keyframes (the baseline condition keeps a camera turning on the spot from dropping any).
+    const double max_turn = params.max_view_turn_fraction * view->field_of_view;
+    bool covered = false;
+    for (std::size_t k = 0; k < keyframe_centres.size() && !covered; ++k) {
+      if ((keyframe_centres[k].second - camera_centre_world).norm() > decision.threshold) continue;
+      const double cos_turn = std::clamp(view->keyframes[k].dot(view->current), -1.0, 1.0);
+      covered = std::acos(cos_turn) <= max_turn;
+    }
+    decision.view_turned = !covered;
+    decision.drop = decision.view_turned;
   }
   return decision;
 }

@@ -1,6 +1,7 @@
 #include "scale_drift_slam/tracking/motion_prior.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -17,6 +18,9 @@ void MotionPriorParams::validate() const {
   for (const double v : {min_rotation_sigma, min_translation_sigma, fallback_rotation_sigma,
                          fallback_translation_sigma}) {
     if (!(v > 0.0)) throw std::invalid_argument("motion_prior sigmas must be > 0");
+  }
+  if (!std::isfinite(candidate_max_forward_backward_px)) {
+    throw std::invalid_argument("motion_prior.candidate_max_forward_backward_px must be finite");
   }
 }
 
@@ -103,6 +107,12 @@ MotionPrior MotionPriorEstimator::estimate(
   }
   extra_tracked->assign(to.begin() + picked.size(), to.end());
   extra_ok->assign(ok.begin() + picked.size(), ok.end());
+  if (params_.candidate_max_forward_backward_px > 0.0 &&
+      !(params_.flow.method == FlowMethod::kLucasKanade &&
+        params_.flow.max_forward_backward_px > 0.0)) {
+    flow_.checkBackward(previous, current, extra_px, *extra_tracked, extra_ok,
+                        params_.candidate_max_forward_backward_px);
+  }
 
   features::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;

@@ -121,6 +121,29 @@ void OpticalFlow::lucasKanadePass(const std::vector<cv::Mat>& previous,
   }
 }
 
+void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
+                                const features::ImagePyramid& current,
+                                const std::vector<cv::Point2f>& from,
+                                const std::vector<cv::Point2f>& to, std::vector<unsigned char>* ok,
+                                double max_px) const {
+  if (from.empty()) return;
+  const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
+  const std::vector<cv::Mat> prev_levels(previous.levels.begin(), previous.levels.begin() + levels);
+  const std::vector<cv::Mat> cur_levels(current.levels.begin(), current.levels.begin() + levels);
+  std::vector<cv::Point2f> back = from;
+  std::vector<unsigned char> back_ok;
+  std::vector<float> error;
+  cv::calcOpticalFlowPyrLK(cur_levels, prev_levels, to, back, back_ok, error,
+                           cv::Size(params_.window, params_.window), levels - 1,
+                           cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                            params_.max_iterations, 0.01),
+                           cv::OPTFLOW_USE_INITIAL_FLOW);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const cv::Point2f d = back[i] - from[i];
+    if (!back_ok[i] || d.dot(d) > max_px * max_px) (*ok)[i] = 0;
+  }
+}
+
 void OpticalFlow::trackDis(const features::ImagePyramid& previous,
                            const features::ImagePyramid& current,
                            const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,

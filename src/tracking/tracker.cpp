@@ -1,6 +1,7 @@
 #include "scale_drift_slam/tracking/tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "scale_drift_slam/common/statistics.h"
@@ -63,10 +64,27 @@ std::string trackingStateName(TrackingState state) {
   return "unknown";
 }
 
+namespace {
+
+/// The angle between the rays through the middles of opposite image borders, the smaller of the
+/// horizontal and the vertical one (any lens model).
+double narrowestFieldOfView(const geometry::CameraModel& camera) {
+  const double w = camera.width() - 1.0, h = camera.height() - 1.0;
+  const auto angle = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector3d ra = camera.unproject(a).normalized(),
+                          rb = camera.unproject(b).normalized();
+    return std::acos(std::clamp(ra.dot(rb), -1.0, 1.0));
+  };
+  return std::min(angle({0.0, h / 2}, {w, h / 2}), angle({w / 2, 0.0}, {w / 2, h}));
+}
+
+}  // namespace
+
 Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params)
     : camera_(std::move(camera)),
       params_(params),
       focal_(camera_ ? camera_->calibration().meanFocalLength() : 0.0),
+      field_of_view_(camera_ ? narrowestFieldOfView(*camera_) : 0.0),
       initializer_(camera_, params.initializer, params.features, params.motion_prior.flow),
       motion_prior_(params.motion_prior, params.motion_ba),
       candidates_(params.candidates, params.features, focal_) {

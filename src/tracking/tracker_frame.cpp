@@ -1,6 +1,7 @@
 // Tracker: tracking one frame and dropping keyframes (the rest is in tracker.cpp).
 
 #include <algorithm>
+#include <cmath>
 
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/tracking/tracker.h"
@@ -16,11 +17,23 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   result->times.flow = stage.lapMs();
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
-  const std::vector<features::SearchMatch> matches = searchLocalMap(prior, image, &ids);
+  const std::vector<features::SearchPoint> search_points = localSearchPoints(prior, &ids);
+  const features::CornerGrid corners = features::detectSearchCorners(image.base(), params_.search);
+  std::vector<features::SearchMatch> matches = features::activeSearch(
+      search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners, params_.search);
   result->times.search = stage.lapMs();
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
   std::vector<Measurement> inliers;
-  const geometry::SE3 T_cam_world = solvePose(prior, ids, matches, &inliers, result);
+  geometry::SE3 T_cam_world = solvePose(prior.T_cur_world, ids, matches, &inliers, result);
+  // 4b. The points missed around the prior, searched again around the pose: the prior rests on
+  // the flow of the points tracked in the previous frame, which in a fast pan crowd into the
+  // image side the view is leaving, and its error on the other side, where the newest points
+  // are, can exceed its gate (found 65 of 249 visible right after a keyframe promoted 192).
+  if (result->num_inliers >= params_.min_inliers) {
+    researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
+                   &T_cam_world, result);
+  }
+  recordSearches(ids, matches, result);
   result->times.motion_ba = stage.lapMs();
 
   previous_image_ = image;
@@ -58,9 +71,12 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
   result->times.filters = stage.lapMs();
   // 6. The keyframe rule (tracking is good or weak here, not lost).
-  const KeyframeDecision decision =
-      decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
-                     params_.keyframes, TrackedPoints{result->num_inliers, tracked_at_keyframe_});
+  const ViewDirections view{T_cam_world.rotation().conjugate() * Eigen::Vector3d::UnitZ(),
+                            map_.keyframeViewAxes(), field_of_view_};
+  const KeyframeDecision decision = decideKeyframe(
+      T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
+      params_.keyframes,
+      TrackedPoints{result->num_inliers, tracked_at_keyframe_, candidates_.numCertain()}, view);
   if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
   result->times.keyframe = stage.lapMs();
 }
@@ -83,9 +99,8 @@ MotionPrior Tracker::estimatePrior(const features::ImagePyramid& image,
                                 candidate_ok);
 }
 
-std::vector<features::SearchMatch> Tracker::searchLocalMap(const MotionPrior& prior,
-                                                           const features::ImagePyramid& image,
-                                                           std::vector<map::PointId>* ids) {
+std::vector<features::SearchPoint> Tracker::localSearchPoints(const MotionPrior& prior,
+                                                              std::vector<map::PointId>* ids) {
   std::vector<map::PointId> tracked;
   tracked.reserve(previous_measurements_.size());
   for (const Measurement& m : previous_measurements_)
@@ -108,29 +123,75 @@ std::vector<features::SearchMatch> Tracker::searchLocalMap(const MotionPrior& pr
                                           : geometry::SE3();
     search_points.push_back({point.p_world, T_ref_world, &point.appearance});
   }
-  const features::CornerGrid corners = features::detectSearchCorners(image.base(), params_.search);
-  return features::activeSearch(search_points, prior.T_cur_world, prior.Sigma, *camera_, image,
-                                corners, params_.search);
+  return search_points;
 }
 
-geometry::SE3 Tracker::solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
-                                 const std::vector<features::SearchMatch>& matches,
-                                 std::vector<Measurement>* inliers, FrameResult* result) {
-  features::MotionOnlyInput input;
-  input.T_cam_world_guess = prior.T_cur_world;
-  input.focal_length_px = focal_;
-  std::vector<std::size_t> used;
+void Tracker::researchMissed(const geometry::SE3& T_cam_world, const std::vector<map::PointId>& ids,
+                             const std::vector<features::SearchPoint>& search_points,
+                             const features::ImagePyramid& image,
+                             const features::CornerGrid& corners,
+                             std::vector<features::SearchMatch>* matches,
+                             std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                             FrameResult* result) {
+  std::vector<std::size_t> missed;
+  std::vector<features::SearchPoint> again;
+  for (std::size_t i = 0; i < matches->size(); ++i) {
+    if ((*matches)[i].searched && !(*matches)[i].found) {
+      missed.push_back(i);
+      again.push_back(search_points[i]);
+    }
+  }
+  if (missed.empty()) return;
+  // Around the solved pose the uncertainty is that of the prior's floor.
+  const double depth = last_scene_depth_ > 0.0 ? last_scene_depth_ : 1.0;
+  Eigen::Matrix<double, 6, 1> d;
+  d << Eigen::Vector3d::Constant(std::pow(params_.motion_prior.min_rotation_sigma, 2)),
+      Eigen::Vector3d::Constant(std::pow(params_.motion_prior.min_translation_sigma * depth, 2));
+  const std::vector<features::SearchMatch> found_again = features::activeSearch(
+      again, T_cam_world, d.asDiagonal(), *camera_, image, corners, params_.search);
+  int recovered = 0;
+  for (std::size_t k = 0; k < missed.size(); ++k) {
+    if (!found_again[k].found) continue;
+    (*matches)[missed[k]] = found_again[k];
+    ++recovered;
+  }
+  if (recovered == 0) return;
+  std::vector<Measurement> more_inliers;
+  FrameResult counts;
+  const geometry::SE3 T = solvePose(T_cam_world, ids, *matches, &more_inliers, &counts);
+  if (counts.num_inliers <= result->num_inliers) return;
+  *T_solved = T;
+  *inliers = std::move(more_inliers);
+  result->num_found = counts.num_found;
+  result->num_inliers = counts.num_inliers;
+}
+
+void Tracker::recordSearches(const std::vector<map::PointId>& ids,
+                             const std::vector<features::SearchMatch>& matches,
+                             FrameResult* result) {
   for (std::size_t i = 0; i < matches.size(); ++i) {
     TrackedPoint& point = map_.point(ids[i]);
     point.times_searched += matches[i].searched;
+    point.times_found += matches[i].found;
     result->num_visible += matches[i].visible;
+  }
+}
+
+geometry::SE3 Tracker::solvePose(const geometry::SE3& T_guess, const std::vector<map::PointId>& ids,
+                                 const std::vector<features::SearchMatch>& matches,
+                                 std::vector<Measurement>* inliers, FrameResult* result) {
+  features::MotionOnlyInput input;
+  input.T_cam_world_guess = T_guess;
+  input.focal_length_px = focal_;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
     if (!matches[i].found) continue;
-    ++point.times_found;
-    input.observations.push_back({point.p_world, matches[i].xy});
+    input.observations.push_back({map_.point(ids[i]).p_world, matches[i].xy});
     used.push_back(i);
   }
   result->num_found = static_cast<int>(used.size());
-  if (result->num_found < params_.min_inliers) return prior.T_cur_world;
+  result->num_inliers = 0;
+  if (result->num_found < params_.min_inliers) return T_guess;
   const features::MotionOnlyResult solved =
       features::solveMotionOnlyBundleAdjustment(input, params_.motion_ba);
   for (std::size_t k = 0; k < used.size(); ++k) {

@@ -133,4 +133,13 @@ std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> TrackingMap::keyframeCe
   return centres;
 }
 
+std::vector<Eigen::Vector3d> TrackingMap::keyframeViewAxes() const {
+  std::vector<Eigen::Vector3d> axes;
+  axes.reserve(keyframes_.size());
+  for (const auto& [id, keyframe] : keyframes_) {
+    axes.push_back(keyframe.T_kf_world.rotation().conjugate() * Eigen::Vector3d::UnitZ());
+  }
+  return axes;
+}
+
 }  // namespace scale_drift_slam::tracking

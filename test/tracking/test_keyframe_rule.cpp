@@ -1,5 +1,7 @@
 // The keyframe rule: distance to the closest keyframe against a fraction of the scene depth.
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "scale_drift_slam/tracking/keyframe_rule.h"
@@ -53,6 +55,53 @@ TEST(KeyframeRule, DropsEarlierWhenTheViewLeavesTheMappedPoints) {
   EXPECT_FALSE(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{1, 200}).drop);
   params.min_tracked_ratio = 1.5;
   EXPECT_THROW(params.validate(), std::invalid_argument);
+}
+
+TEST(KeyframeRule, DropsWhenCertainNewFeaturesGiveTheParallax) {
+  const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframes = {
+      {3, Eigen::Vector3d(0, 0, 0)}};
+  KeyframeRuleParams params;  // threshold 0.4 at depth 4, parallax from 0.1
+  params.min_certain_candidates = 40;
+  const Eigen::Vector3d close(0.05, 0, 0);
+  // Too close for the distance, but 40 new features have certain depths: their parallax is there.
+  KeyframeDecision d = decideKeyframe(close, keyframes, 4.0, params, TrackedPoints{20, 200, 40});
+  EXPECT_TRUE(d.drop);
+  EXPECT_TRUE(d.view_leaving_map);
+  EXPECT_FALSE(decideKeyframe(close, keyframes, 4.0, params, TrackedPoints{20, 200, 39}).drop);
+  params.min_certain_candidates = 0;  // the distance alone
+  EXPECT_FALSE(decideKeyframe(close, keyframes, 4.0, params, TrackedPoints{20, 200, 400}).drop);
+  params.min_certain_candidates = -1;
+  EXPECT_THROW(params.validate(), std::invalid_argument);
+}
+
+TEST(KeyframeRule, DropsWhenTheViewTurnedAwayFromTheNearbyKeyframes) {
+  const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframes = {
+      {3, Eigen::Vector3d(0, 0, 0)}, {4, Eigen::Vector3d(5, 0, 0)}};
+  KeyframeRuleParams params;  // threshold 0.4 at depth 4, parallax from 0.1
+  params.max_view_turn_fraction = 0.25;
+  const double fov = 1.0;  // rad: turns beyond 0.25 rad are not covered
+  const Eigen::Vector3d moved(0.2, 0, 0);
+  const Eigen::Vector3d turned(std::sin(0.3), 0, std::cos(0.3));
+  // Keyframe 4 looks the same way but is far away: it does not cover the view.
+  ViewDirections view{turned, {Eigen::Vector3d::UnitZ(), turned}, fov};
+  KeyframeDecision d = decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{200, 200}, view);
+  EXPECT_TRUE(d.drop);
+  EXPECT_TRUE(d.view_turned);
+  // A small turn is covered by keyframe 3.
+  view.current = Eigen::Vector3d(std::sin(0.2), 0, std::cos(0.2));
+  EXPECT_FALSE(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{200, 200}, view).drop);
+  // Turning on the spot (no parallax): wait.
+  view.current = turned;
+  EXPECT_FALSE(decideKeyframe(Eigen::Vector3d(0.05, 0, 0), keyframes, 4.0, params,
+                              TrackedPoints{200, 200}, view)
+                   .drop);
+  // Fraction 0 switches it off; one direction per keyframe is required.
+  params.max_view_turn_fraction = 0.0;
+  EXPECT_FALSE(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{200, 200}, view).drop);
+  params.max_view_turn_fraction = 0.25;
+  view.keyframes.pop_back();
+  EXPECT_THROW(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{200, 200}, view),
+               std::invalid_argument);
 }
 
 TEST(KeyframeRule, MedianSceneDepthIgnoresPointsBehindTheCamera) {

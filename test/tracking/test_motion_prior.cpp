@@ -74,7 +74,9 @@ geometry::SE3 panPose(int k, double deg) {
 }
 
 /// The prior for frame 2 of the pan from frame 1, with the constant-velocity guess.
-MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* candidate_ok) {
+/// `candidate_error_px`, when given: the distance of each candidate's track from its true pixel.
+MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* candidate_ok,
+                     std::vector<double>* candidate_error_px = nullptr) {
   const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto camera = test::pinholeCamera(450.0);
   const auto render = [&](int k) {
@@ -84,6 +86,7 @@ MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* 
   const features::ImagePyramid previous = render(1), current = render(2);
   std::vector<FlowSeed> seeds;
   std::vector<cv::Point2f> candidates;
+  std::vector<Eigen::Vector3d> candidates_world;
   for (const cv::KeyPoint& k : features::detectSpreadCorners(previous.base(), 300, {})) {
     const Eigen::Vector2d px(k.pt.x, k.pt.y);
     const Eigen::Vector3d ray = camera->unproject(px);
@@ -100,6 +103,7 @@ MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* 
       seeds.push_back({k.pt, p_world});
     } else {
       candidates.push_back(k.pt);
+      candidates_world.push_back(p_world);
     }
   }
   MotionPriorParams params;
@@ -108,8 +112,18 @@ MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* 
   const geometry::SE3 T_previous = panPose(1, deg).inverse();
   const geometry::SE3 T_guess = T_previous * panPose(0, deg) * T_previous;  // constant velocity
   std::vector<cv::Point2f> candidate_px;
-  return estimator.estimate(previous, current, seeds, candidates, T_guess, T_previous, 2.0, *camera,
-                            &candidate_px, candidate_ok);
+  const MotionPrior prior =
+      estimator.estimate(previous, current, seeds, candidates, T_guess, T_previous, 2.0, *camera,
+                         &candidate_px, candidate_ok);
+  if (candidate_error_px != nullptr) {
+    candidate_error_px->clear();
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      const auto px = camera->project(panPose(2, deg).inverse() * candidates_world[i]);
+      candidate_error_px->push_back(
+          px ? std::hypot(px->x() - candidate_px[i].x, px->y() - candidate_px[i].y) : 1e9);
+    }
+  }
+  return prior;
 }
 
 TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
@@ -117,7 +131,8 @@ TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
   // from the points themselves; from where the steady motion moves them it is a small step.
   const double deg = 10.0;
   std::vector<unsigned char> predicted_ok, plain_ok;
-  const MotionPrior predicted = panPrior(deg, true, &predicted_ok);
+  std::vector<double> error_px;
+  const MotionPrior predicted = panPrior(deg, true, &predicted_ok, &error_px);
   const MotionPrior plain = panPrior(deg, false, &plain_ok);
   const geometry::SE3 T_true = panPose(2, deg).inverse();
   ASSERT_TRUE(predicted.from_flow);
@@ -126,7 +141,14 @@ TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
   const auto count = [](const std::vector<unsigned char>& ok) {
     return std::count(ok.begin(), ok.end(), 1);
   };
-  EXPECT_GT(count(predicted_ok), 0.8 * predicted_ok.size());  // the candidates follow too
+  // The candidates follow too, and those kept are right: a few near the room's corners and
+  // borders have no true match within tens of pixels, and the backward check drops most of them
+  // (a wrong track would feed a depth filter unchecked).
+  EXPECT_GT(count(predicted_ok), 0.7 * predicted_ok.size());
+  int kept_wrong = 0;
+  for (std::size_t i = 0; i < predicted_ok.size(); ++i)
+    kept_wrong += predicted_ok[i] && error_px[i] > 10.0;
+  EXPECT_LT(kept_wrong, 0.06 * count(predicted_ok));
   std::printf(
       "predicted: %d tracks, %ld of %zu candidates; from the points: %d tracks (%s), "
       "%ld candidates\n",

@@ -69,6 +69,8 @@ class FeatureCandidates {
   void apply(const map::MapUpdate& update);
 
   std::size_t size() const { return candidates_.size(); }
+  /// Candidates whose depth is certain enough for promotion (at the next keyframe).
+  int numCertain() const;
 
  private:
   struct Candidate {

@@ -4,7 +4,9 @@
 // map's scale drifts, so the threshold is a fraction of the scene depth (the median depth of the
 // points the camera tracks), not a fixed distance. Our addition for weakly textured scenes and
 // narrow lenses: also drop one when most of the map points tracked at the last keyframe have left
-// the view, so that new points enter the map before the old ones are all gone. Pure functions;
+// the view, so that new points enter the map before the old ones are all gone, and when the view
+// has turned away from every nearby keyframe (a fast pan: the candidates of new points are spawned
+// and promoted only at keyframes, and must be before the map has left the view). Pure functions;
 // any thread.
 
 #include <optional>
@@ -27,6 +29,13 @@ struct KeyframeRuleParams {
   /// ...once the camera has moved this fraction of the distance threshold (parallax for the new
   /// points).
   double min_distance_fraction = 0.25;
+  /// ...or once this many new features have a certain depth (they are promoted at the keyframe;
+  /// 0: the distance alone).
+  int min_certain_candidates = 40;
+  /// Also drop when the viewing direction is more than this fraction of the camera's (narrowest)
+  /// field of view away from that of every keyframe within the distance threshold, given the
+  /// same parallax condition (0: never).
+  double max_view_turn_fraction = 0.25;
   /// Throws std::invalid_argument naming the bad value.
   void validate() const;
 };
@@ -35,11 +44,21 @@ struct KeyframeRuleParams {
 struct TrackedPoints {
   int now = 0;
   int at_last_keyframe = 0;
+  /// New features whose depth is certain (they are promoted at the next keyframe).
+  int certain_candidates = 0;
+};
+
+/// Viewing directions (unit optical axes in the world) for the view-turn rule.
+struct ViewDirections {
+  Eigen::Vector3d current = Eigen::Vector3d::UnitZ();
+  std::vector<Eigen::Vector3d> keyframes;  ///< In the order of the keyframe centres.
+  double field_of_view = 0.0;              ///< The narrowest angular extent of the image (rad).
 };
 
 struct KeyframeDecision {
   bool drop = false;
   bool view_leaving_map = false;  ///< Dropped for the tracked points, not the distance.
+  bool view_turned = false;       ///< Dropped for the viewing direction, not the distance.
   double distance = 0.0;   ///< To the closest keyframe (map units); infinity when there is none.
   double threshold = 0.0;  ///< distance_to_depth_ratio * scene depth.
   map::KeyframeId closest = 0;
@@ -51,12 +70,14 @@ double medianSceneDepth(const geometry::SE3& T_cam_world,
                         const std::vector<Eigen::Vector3d>& points_world);
 
 /// Applies the rule. `keyframe_centres` are (id, camera centre in the world); with none, the
-/// decision is to drop. Without `tracked`, the distance rule alone (the paper's). Throws
-/// std::invalid_argument for a non-positive or non-finite depth.
+/// decision is to drop. Without `tracked` and `view`, the distance rule alone (the paper's).
+/// Throws std::invalid_argument for a non-positive or non-finite depth, or `view` with a number of
+/// keyframe directions other than that of the centres.
 KeyframeDecision decideKeyframe(
     const Eigen::Vector3d& camera_centre_world,
     const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>>& keyframe_centres,
     double scene_depth, const KeyframeRuleParams& params,
-    const std::optional<TrackedPoints>& tracked = std::nullopt);
+    const std::optional<TrackedPoints>& tracked = std::nullopt,
+    const std::optional<ViewDirections>& view = std::nullopt);
 
 }  // namespace scale_drift_slam::tracking

@@ -33,6 +33,11 @@ struct MotionPriorParams {
   /// their position, candidates at the scene depth), not where it was: a fast but steady turn
   /// moves the image by more than Lucas-Kanade's pyramid reaches from zero.
   bool predict_flow = true;
+  /// Drop the candidates' (new features') tracks whose backward flow misses the start by more
+  /// than this (pixels; <= 0: no check unless flow.max_forward_backward_px checks all tracks).
+  /// Their tracks feed the inverse-depth filters directly, with no robust cost to reject a track
+  /// that slid along its epipolar line, and the points they are promoted to are then wrong.
+  double candidate_max_forward_backward_px = 2.0;
   void validate() const;
 };
 

@@ -46,6 +46,12 @@ class OpticalFlow {
              const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
              std::vector<unsigned char>* ok, const std::vector<cv::Point2f>* start = nullptr);
 
+  /// Clears `ok[i]` where the backward Lucas-Kanade flow from `to[i]` (in `current`) misses
+  /// `from[i]` (in `previous`) by more than `max_px` pixels, whatever the forward method.
+  void checkBackward(const features::ImagePyramid& previous, const features::ImagePyramid& current,
+                     const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                     std::vector<unsigned char>* ok, double max_px) const;
+
   const OpticalFlowParams& params() const { return params_; }
 
  private:

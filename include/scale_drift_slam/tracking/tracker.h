@@ -125,11 +125,23 @@ class Tracker {
   MotionPrior estimatePrior(const features::ImagePyramid& image,
                             std::vector<cv::Point2f>* candidate_px,
                             std::vector<unsigned char>* candidate_ok);
-  std::vector<features::SearchMatch> searchLocalMap(const MotionPrior& prior,
-                                                    const features::ImagePyramid& image,
-                                                    std::vector<map::PointId>* ids);
-  /// Motion-only BA on the found matches; fills the inliers and the counts of `result`.
-  geometry::SE3 solvePose(const MotionPrior& prior, const std::vector<map::PointId>& ids,
+  /// The local map's points (ids and what active search needs) around the prior.
+  std::vector<features::SearchPoint> localSearchPoints(const MotionPrior& prior,
+                                                       std::vector<map::PointId>* ids);
+  /// Searches the points searched but not found again around the solved pose; keeps the new
+  /// matches and pose when they give more inliers.
+  void researchMissed(const geometry::SE3& T_cam_world, const std::vector<map::PointId>& ids,
+                      const std::vector<features::SearchPoint>& search_points,
+                      const features::ImagePyramid& image, const features::CornerGrid& corners,
+                      std::vector<features::SearchMatch>* matches,
+                      std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                      FrameResult* result);
+  /// The points' search statistics (retirement) and the visible count of `result`.
+  void recordSearches(const std::vector<map::PointId>& ids,
+                      const std::vector<features::SearchMatch>& matches, FrameResult* result);
+  /// Motion-only BA on the found matches from `T_guess`; fills the inliers and the found and
+  /// inlier counts of `result`.
+  geometry::SE3 solvePose(const geometry::SE3& T_guess, const std::vector<map::PointId>& ids,
                           const std::vector<features::SearchMatch>& matches,
                           std::vector<Measurement>* inliers, FrameResult* result);
   void dropKeyframe(double timestamp, const features::ImagePyramid& image,
@@ -149,6 +161,7 @@ class Tracker {
   std::shared_ptr<const geometry::CameraModel> camera_;
   TrackerParams params_;
   double focal_;
+  double field_of_view_;  ///< The narrowest angular extent of the image (rad), for keyframes.
   MapInitializer initializer_;
   MotionPriorEstimator motion_prior_;
   FeatureCandidates candidates_;

@@ -69,6 +69,8 @@ class TrackingMap {
                                                     int steps, int min_shared) const;
   /// Keyframe centres (id, centre in the world) for the keyframe rule.
   std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframeCentres() const;
+  /// Keyframe viewing directions (unit optical axes in the world), in the order of the centres.
+  std::vector<Eigen::Vector3d> keyframeViewAxes() const;
 
   bool hasPoint(map::PointId id) const { return points_.count(id) != 0; }
   bool hasKeyframe(map::KeyframeId id) const { return keyframes_.count(id) != 0; }
