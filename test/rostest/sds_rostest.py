@@ -133,9 +133,30 @@ def last_stamp(folder):
     return float(lines[-1].split()[0])
 
 
+def missing_frames(statuses, folder, max_leading=3):
+    """Why the TrackingStatus messages do not cover every image of the rendered sequence, or ''.
+    Only the first `max_leading` images may be missing: the node drops images until it has a
+    calibration, and roscpp delivers the first CameraInfo and the first images of a bag in no
+    fixed order (on a loaded machine several images may come first). Nothing may be missing
+    after the first status, and nothing may be there twice."""
+    lines = [l for l in open(os.path.join(folder, 'groundtruth.txt')) if l.strip() and l[0] != '#']
+    stamps = [round(float(l.split()[0]), 6) for l in lines]
+    seen = [round(s.header.stamp.to_sec(), 6) for s in statuses]
+    if not seen or seen[0] not in stamps:
+        return 'no status of a frame of the sequence'
+    first = stamps.index(seen[0])
+    if first > max_leading:
+        return 'the first %d images have no status (at most %d may precede CameraInfo)' % (
+            first, max_leading)
+    if seen != stamps[first:]:
+        return '%d statuses for the %d images from the first status on' % (
+            len(seen), len(stamps) - first)
+    return ''
+
+
 def wait_for_last_frame(statuses, folder, timeout=30):
-    """Waits until a TrackingStatus of the sequence's last frame arrived. At most the first image
-    of a bag may be missing: it can arrive before the first CameraInfo."""
+    """Waits until a TrackingStatus of the sequence's last frame arrived (missing_frames says
+    whether every frame before it got one)."""
     end = last_stamp(folder)
     return wait_until(lambda: statuses and abs(statuses[-1].header.stamp.to_sec() - end) < 1e-3,
                       timeout)
