@@ -111,6 +111,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"filter", "max_promotion_error_px", &t.candidates.filter.max_promotion_error_px},
       {"keyframes", "distance_to_depth_ratio", &t.keyframes.distance_to_depth_ratio},
       {"keyframes", "min_tracked_ratio", &t.keyframes.min_tracked_ratio},
+      {"keyframes", "min_tracked_points", &t.keyframes.min_tracked_points},
       {"keyframes", "min_distance_fraction", &t.keyframes.min_distance_fraction},
       {"keyframes", "min_certain_candidates", &t.keyframes.min_certain_candidates},
       {"keyframes", "max_view_turn_fraction", &t.keyframes.max_view_turn_fraction},

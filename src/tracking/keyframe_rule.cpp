@@ -16,6 +16,9 @@ void KeyframeRuleParams::validate() const {
   if (!(min_tracked_ratio >= 0.0 && min_tracked_ratio < 1.0)) {
     throw std::invalid_argument("keyframe rule: min_tracked_ratio must be in [0, 1)");
   }
+  if (min_tracked_points < 0) {
+    throw std::invalid_argument("keyframe rule: min_tracked_points must be >= 0");
+  }
   if (!(min_distance_fraction >= 0.0 && min_distance_fraction <= 1.0)) {
     throw std::invalid_argument("keyframe rule: min_distance_fraction must be in [0, 1]");
   }
@@ -67,8 +70,12 @@ KeyframeDecision decideKeyframe(
                         (tracked && params.min_certain_candidates > 0 &&
                          tracked->certain_candidates >= params.min_certain_candidates);
   if (!decision.drop && tracked && tracked->at_last_keyframe > 0) {
+    // At an open crossing the near facades leave the view, the median depth of what is left
+    // doubles and so does the distance threshold, just when new points are needed most.
+    const bool starving = tracked->now < params.min_tracked_points;
     decision.view_leaving_map =
-        tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe && parallax;
+        (tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe || starving) &&
+        parallax;
     decision.drop = decision.view_leaving_map;
   }
   if (!decision.drop && view && params.max_view_turn_fraction > 0.0 && parallax) {

@@ -50,10 +50,30 @@ TEST(KeyframeRule, DropsEarlierWhenTheViewLeavesTheMappedPoints) {
   EXPECT_FALSE(
       decideKeyframe(Eigen::Vector3d(0.05, 0, 0), keyframes, 4.0, params, TrackedPoints{20, 200})
           .drop);
-  // Ratio 0 switches the addition off.
+  // Ratio 0 and no minimum count switch the addition off.
   params.min_tracked_ratio = 0.0;
+  params.min_tracked_points = 0;
   EXPECT_FALSE(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{1, 200}).drop);
   params.min_tracked_ratio = 1.5;
+  EXPECT_THROW(params.validate(), std::invalid_argument);
+}
+
+TEST(KeyframeRule, DropsWhenTheMapIsStarvingWhateverTheLastKeyframeHad) {
+  // An open crossing: the last keyframe tracked only 40 points (already starved), 30 now: the
+  // ratio rule would wait for 20; below 50 points a keyframe is due once there is parallax.
+  const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframes = {
+      {3, Eigen::Vector3d(0, 0, 0)}};
+  KeyframeRuleParams params;
+  params.min_tracked_points = 50;
+  const Eigen::Vector3d moved(0.2, 0, 0);  // threshold 0.4 at depth 4, parallax from 0.1
+  KeyframeDecision d = decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{30, 40});
+  EXPECT_TRUE(d.drop);
+  EXPECT_TRUE(d.view_leaving_map);
+  EXPECT_FALSE(decideKeyframe(moved, keyframes, 4.0, params, TrackedPoints{60, 40}).drop);
+  EXPECT_FALSE(  // no parallax yet
+      decideKeyframe(Eigen::Vector3d(0.05, 0, 0), keyframes, 4.0, params, TrackedPoints{30, 40})
+          .drop);
+  params.min_tracked_points = -1;
   EXPECT_THROW(params.validate(), std::invalid_argument);
 }
 

@@ -26,6 +26,10 @@ struct KeyframeRuleParams {
   /// Also drop when the map points tracked fall below this fraction of those tracked at the last
   /// keyframe (0: never)...
   double min_tracked_ratio = 0.5;
+  /// ...or below this many, whatever the last keyframe had (weak tracking: the map is starving,
+  /// and new points are promoted only at keyframes; a last keyframe that was already starved
+  /// makes the ratio useless; 0: never)...
+  int min_tracked_points = 50;
   /// ...once the camera has moved this fraction of the distance threshold (parallax for the new
   /// points).
   double min_distance_fraction = 0.25;
