@@ -162,6 +162,15 @@ def wait_for_last_frame(statuses, folder, timeout=30):
                       timeout)
 
 
+def map_odom_recorder(store):
+    """A /tf callback that appends (stamp, transform) of every map -> odom transform to store."""
+    def record(msg):
+        for t in msg.transforms:
+            if t.header.frame_id == 'map' and t.child_frame_id == 'odom':
+                store.append((t.header.stamp.to_sec(), t.transform))
+    return record
+
+
 def wait_until(condition, timeout, step=0.1):
     deadline = time.time() + timeout
     while time.time() < deadline:

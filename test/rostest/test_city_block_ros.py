@@ -44,15 +44,11 @@ class CityBlock(unittest.TestCase):
             (m.header.stamp, m.has_loop_correction, list(zip(m.loop_link_from, m.loop_link_to)))),
             queue_size=100)
         rospy.Subscriber('/path', Path, self.paths.append, queue_size=100)
-        rospy.Subscriber('/tf', TFMessage, self.on_tf, queue_size=1000)
+        rospy.Subscriber('/tf', TFMessage, sds.map_odom_recorder(self.map_odom),
+                         queue_size=1000)
         self.assertTrue(sds.wait_until(lambda: sds.node_pid('/loop_closure_node'), 30))
         rospy.wait_for_service('/mapping_node/save_trajectory', timeout=30)
         time.sleep(1.0)  # subscriptions connect
-
-    def on_tf(self, msg):
-        for t in msg.transforms:
-            if t.header.frame_id == 'map' and t.child_frame_id == 'odom':
-                self.map_odom.append((t.header.stamp.to_sec(), t.transform))
 
     def test_city_block_drive(self):
         bag, folder = sds.render_bag('city_block', FRAMES)

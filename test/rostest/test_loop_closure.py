@@ -81,17 +81,13 @@ class LoopClosure(unittest.TestCase):
         rospy.Subscriber('/relocalisation_answers', RelocalisationAnswer, self.answers.append,
                          queue_size=100)
         rospy.Subscriber('/path', Path, self.paths.append, queue_size=100)
-        rospy.Subscriber('/tf', TFMessage, self.on_tf, queue_size=1000)
+        rospy.Subscriber('/tf', TFMessage, sds.map_odom_recorder(self.map_odom),
+                         queue_size=1000)
         self.image_pub = rospy.Publisher('/camera/image_raw', Image, queue_size=100)
         rospy.wait_for_service('/mapping_node/save_trajectory', timeout=30)
         self.assertTrue(sds.wait_until(lambda: sds.node_pid('/loop_closure_node'), 30))
         self.assertTrue(sds.wait_until(lambda: self.image_pub.get_num_connections() > 0, 30))
         time.sleep(1.0)  # subscriptions connect
-
-    def on_tf(self, msg):
-        for t in msg.transforms:
-            if t.header.frame_id == 'map' and t.child_frame_id == 'odom':
-                self.map_odom.append((t.header.stamp.to_sec(), t.transform))
 
     def test_loop_and_relocalisation_on_courtyard(self):
         bag, folder = sds.render_bag('courtyard_loop', FRAMES)
