@@ -26,7 +26,11 @@ struct InverseDepthFilterParams {
   double max_residual_sigmas = 4.0;  ///< Reject an update leaving a larger residual (in sigmas).
   int max_iterations = 10;           ///< LM iterations per update.
   /// Certain enough for promotion: sigma(depth) / depth below this (sigma_q / q, first order).
-  double max_relative_depth_sigma = 0.05;
+  /// About 1 / (focal * parallax): 10 % asks for 0.8 degrees at a 718 px focal length. The window
+  /// BA refines the point from then on; 5 % (1.6 degrees) starved the map of a car crossing an
+  /// open junction, where what is left in view lies ahead, near the focus of expansion, and
+  /// gains parallax slowly (doc/benchmarks.md, "Promotion certainty").
+  double max_relative_depth_sigma = 0.1;
   int min_updates = 2;  ///< And at least this many accepted updates.
   /// Promotion: reject if the BA'd point reprojects worse than this in any keyframe (pixels).
   double max_promotion_error_px = 3.0;
