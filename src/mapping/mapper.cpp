@@ -85,6 +85,8 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
       return {};
     }
   }
+  for (const auto& [id, keyframe] : map_.keyframes())
+    stats.keyframes_before.emplace_back(keyframe.timestamp, keyframe.T_kf_world);
   // The earlier loops and this one; kept for later graphs only once the graph is solved (a graph
   // that cannot be built or solved throws and must not poison the next loops).
   std::vector<loop::PoseGraphEdge> loop_edges = loop_edges_;

@@ -2,8 +2,9 @@
 // the loop closure on their own threads), on a TUM, EuRoC or KITTI folder or a rosbag. Writes
 // DIR/trajectory.txt (every tracked frame, corrected by the loop closures, TUM, T_world_cam),
 // DIR/trajectory_as_tracked.txt (the poses as they were output live), DIR/keyframes.txt (the
-// mapper's final keyframes, TUM), DIR/frames.csv (each frame's tracking state, counts and
-// message) and DIR/summary.json (counts, loops, per-stage timing, memory).
+// mapper's final keyframes, TUM), DIR/keyframes_before_loop_N.txt (the keyframes just before the
+// N-th loop correction), DIR/frames.csv (each frame's tracking state, counts and message) and
+// DIR/summary.json (counts, loops, per-stage timing, memory).
 
 #include <unistd.h>
 
@@ -43,7 +44,8 @@ folder (mav0/cam0/data.csv + sensor.yaml), a KITTI odometry folder (image_0/, ti
 calib.txt) or a rosbag (*.bag).
   --out DIR            output folder: trajectory.txt (corrected by loop closures),
                        trajectory_as_tracked.txt, keyframes.txt (TUM), frames.csv,
-                       summary.json
+                       summary.json, keyframes_before_loop_N.txt (the keyframes just
+                       before the N-th loop correction, TUM)
   --calib FILE         calibration YAML (default: the dataset's own, or the bag's CameraInfo)
   --config FILE        SLAM parameters (default: built-in defaults = config/default.yaml)
   --topic NAME         bag image topic (default /camera/image_raw)
@@ -129,13 +131,19 @@ void addBackgroundTimes(const system::SlamSystem& slam, io::StageTimings* timing
   }
 }
 
+/// The keyframes just before the n-th applied loop's correction (TUM), in the output folder.
+std::string loopSnapshotName(int n) {
+  return "keyframes_before_loop_" + std::to_string(n) + ".txt";
+}
+
 /// The loops applied: keyframe ids, inliers, the measured scale and the correction's figures.
 nlohmann::json loopsJson(const system::SlamSystem& slam) {
   nlohmann::json loops = nlohmann::json::array();
   for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
     if (!loop.applied) continue;
     const loop::LoopConstraint& c = loop.constraint;
-    loops.push_back({{"current_keyframe", c.current_id},
+    loops.push_back({{"keyframes_before", loopSnapshotName(static_cast<int>(loops.size()))},
+                     {"current_keyframe", c.current_id},
                      {"loop_keyframe", c.loop_id},
                      {"current_stamp", slam.map().keyframe(c.current_id).timestamp},
                      {"loop_stamp", slam.map().keyframe(c.loop_id).timestamp},
@@ -282,6 +290,17 @@ void writeTrajectories(const RunOptions& options, const system::SlamSystem& slam
                         "every tracked frame as output live, T_world_cam, run_sequence " + dataset);
   io::saveTumTrajectory((out / "keyframes.txt").string(), keyframePoses(slam.map()),
                         "keyframes after the last window BA, T_world_cam");
+  int index = 0;
+  for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
+    if (!loop.applied) continue;
+    std::vector<io::StampedPose> before;
+    for (const auto& [stamp, T_kf_world] : loop.keyframes_before)
+      before.push_back({stamp, T_kf_world.inverse()});
+    io::saveTumTrajectory((out / loopSnapshotName(index++)).string(), before,
+                          "keyframes just before the correction of loop " +
+                              std::to_string(loop.constraint.current_id) + " -> " +
+                              std::to_string(loop.constraint.loop_id) + ", T_world_cam");
+  }
 }
 
 void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,

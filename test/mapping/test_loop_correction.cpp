@@ -108,6 +108,22 @@ TEST(LoopCorrection, Sim3RemovesScaleDriftThatSE3Keeps) {
   EXPECT_DOUBLE_EQ(se3_stats.current_correction_scale, 1.0);
 }
 
+TEST(LoopCorrection, StatisticsKeepTheDriftedKeyframesTheLoopMeasured) {
+  const DriftedMap drifted = makeDriftedMap(120, 0.004);
+  LoopCorrectionStatistics stats;
+  correct(loop::PoseGraphMode::kSim3, &stats);
+  ASSERT_EQ(stats.keyframes_before.size(), drifted.messages.size());
+  for (std::size_t i = 0; i < drifted.messages.size(); ++i) {
+    const map::Keyframe& sent = drifted.messages[i].keyframe;
+    EXPECT_DOUBLE_EQ(stats.keyframes_before[i].first, sent.timestamp);
+    // The drifted pose as added, not the corrected one (which moved by up to metres).
+    EXPECT_LT((stats.keyframes_before[i].second.inverseTranslation() -
+               sent.T_kf_world.inverseTranslation())
+                  .norm(),
+              1e-9);
+  }
+}
+
 TEST(LoopCorrection, KeyframeMadeBeforeTheCorrectionIsBroughtIntoTheCorrectedFrame) {
   DriftedMap drifted = makeDriftedMap(120, 0.004);
   MapperParams params;

@@ -4,13 +4,16 @@
   loop_checks.py loops SUMMARY GROUNDTRUTH [--max-distance M]
       every loop in run_sequence's summary.json joins two keyframes whose true camera centres are
       within M metres (default 3) and whose optical axes are within 30 degrees: a true loop.
-  loop_checks.py scale SUMMARY GROUNDTRUTH LIVE_TRAJECTORY [--window S] [--tolerance F]
-      the relative scale measured at each loop is within F (default 0.05) of the drift the live
-      (uncorrected) trajectory really had: the ratio of its local scales against the ground truth
-      over S seconds (default 2) at the current and at the loop keyframe.
+  loop_checks.py scale SUMMARY GROUNDTRUTH [--keyframes K] [--tolerance F]
+      the relative scale measured at each loop is within F (default 0.05) of the drift the map
+      really had just before that loop's correction (run_sequence writes those keyframes beside
+      the summary, keyframes_before_loop_N.txt; after a first correction the trajectory as
+      tracked is no longer that map): the ratio of the map's local scales against the ground
+      truth over the K keyframes (default 8) up to the current keyframe and from the loop one.
 Prints one line per loop; exits 1 with the reason on the first failure.
 """
 import json
+import os
 import sys
 
 import numpy as np
@@ -31,12 +34,12 @@ def optical_axis(pose):
     return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
 
 
-def local_scale(estimate, truth, start, end):
-    """Estimate units per metre over [start, end]: the spread of the estimated centres about
-    their mean divided by the spread of the true ones (Umeyama's scale for a rigid fit)."""
-    rows = [(e[1:4], nearest(truth, e[0])[1:4]) for e in estimate if start <= e[0] <= end]
+def local_scale(estimate, truth):
+    """Estimate units per metre over the poses `estimate`: the spread of the estimated centres
+    about their mean divided by the spread of the true ones (Umeyama's scale for a rigid fit)."""
+    rows = [(e[1:4], nearest(truth, e[0])[1:4]) for e in estimate]
     if len(rows) < 5:
-        raise SystemExit("FAIL: only %d frames in [%.2f, %.2f]" % (len(rows), start, end))
+        raise SystemExit("FAIL: only %d keyframes for a local scale" % len(rows))
     est = np.array([r[0] for r in rows])
     gt = np.array([r[1] for r in rows])
     return np.sqrt(((est - est.mean(0)) ** 2).sum() / ((gt - gt.mean(0)) ** 2).sum())
@@ -60,13 +63,14 @@ def main():
             if distance > limit or angle > 30:
                 raise SystemExit("FAIL: a false loop was accepted")
     elif mode == "scale":
-        live = load_tum(sys.argv[4])
-        window, tolerance = option("--window", 2.0), option("--tolerance", 0.05)
+        count, tolerance = int(option("--keyframes", 8)), option("--tolerance", 0.05)
+        folder = os.path.dirname(os.path.abspath(sys.argv[2]))
         for loop in loops:
-            at_current = local_scale(live, truth, loop["current_stamp"] - window,
-                                     loop["current_stamp"])
-            at_loop = local_scale(live, truth, loop["loop_stamp"], loop["loop_stamp"] + window)
-            drift = at_current / at_loop
+            before = load_tum(os.path.join(folder, loop["keyframes_before"]))
+            before = before[np.argsort(before[:, 0])]
+            up_to_current = before[before[:, 0] <= loop["current_stamp"] + 1e-6][-count:]
+            from_loop = before[before[:, 0] >= loop["loop_stamp"] - 1e-6][:count]
+            drift = local_scale(up_to_current, truth) / local_scale(from_loop, truth)
             print("loop %d -> %d: measured scale %.4f, true drift %.4f (error %.2f %%)"
                   % (loop["current_keyframe"], loop["loop_keyframe"], loop["scale"], drift,
                      100 * abs(loop["scale"] / drift - 1)))

@@ -31,8 +31,7 @@ assert s["tracked"] >= 0.95 * s["frames"], "fewer than 95 % of the frames tracke
 assert len(s["loops"]) >= 1, "the loop was not closed"
 PY
 /usr/bin/python3 "$checks" loops "$work/out/summary.json" "$work/seq/groundtruth.txt"
-/usr/bin/python3 "$checks" scale "$work/out/summary.json" "$work/seq/groundtruth.txt" \
-  "$work/out/trajectory_as_tracked.txt"
+/usr/bin/python3 "$checks" scale "$work/out/summary.json" "$work/seq/groundtruth.txt"
 "$bin/evaluate_trajectory" "$work/seq/groundtruth.txt" "$work/out/trajectory.txt" --json \
   > "$work/evaluation.json"
 /usr/bin/python3 - "$work/evaluation.json" <<'PY' || fail "ATE bound"

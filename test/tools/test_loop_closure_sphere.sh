@@ -25,8 +25,7 @@ done
 grep -E "^loop .* corrected" "$work/loops.log" || true
 /usr/bin/python3 "$checks" loops "$work/loops/summary.json" "$work/sphere/groundtruth.txt" \
   --max-distance 4
-/usr/bin/python3 "$checks" scale "$work/loops/summary.json" "$work/sphere/groundtruth.txt" \
-  "$work/loops/trajectory_as_tracked.txt"
+/usr/bin/python3 "$checks" scale "$work/loops/summary.json" "$work/sphere/groundtruth.txt"
 /usr/bin/python3 - "$work" <<'PY' || fail "sphere_flyover bounds"
 import json, sys
 work = sys.argv[1]

@@ -66,6 +66,9 @@ struct LoopCorrectionStatistics {
   double graph_guess_chi2 = 0.0;
   /// Scale of the correction at the current keyframe (1 for SE(3)).
   double current_correction_scale = 1.0;
+  /// Every keyframe's stamp and T_kf_world just before the correction: the map whose drift the
+  /// loop measured (after an earlier correction, the trajectory as tracked is not that map).
+  std::vector<std::pair<double, geometry::SE3>> keyframes_before;
   /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
   double build_ms = 0.0, graph_ms = 0.0, correction_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
   /// Reprojection errors after the correction, before and after the structure-only BA.
