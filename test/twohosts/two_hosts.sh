@@ -14,6 +14,8 @@
 # Usage: two_hosts.sh [--outage SECONDS] [--one-host] [--figures FILE]
 #   --one-host   everything in namespace A on its own address (the bench's baseline, no link)
 #   --figures    write the measured figures (JSON) there (scripts/bench twohosts)
+# TWO_HOSTS_ROBOT_ARGS / TWO_HOSTS_BASE_ARGS: more arguments of robot.launch / base_station.launch
+# (experiments, e.g. keyframe_publish_queue_size:=20, relay_keyframes:=false).
 # Exits 77 (ctest SKIP_RETURN_CODE) with "SKIP: why" where namespaces cannot be made (not root,
 # no `ip netns`, no veth). Namespaces and every process in them are removed on any exit.
 set -uo pipefail
@@ -119,10 +121,11 @@ run_in "$ns_a" "$addr_a" rosparam get /use_sim_time >/dev/null 2>&1 ||
 log "master up at http://$master_addr:$port ($master_ns)"
 
 run_in "$base_ns" "$base_addr" roslaunch scale_drift_slam base_station.launch \
-  master_uri:="http://$master_addr:$port" address:="$base_addr" output:=log \
+  master_uri:="http://$master_addr:$port" address:="$base_addr" output:=log ${TWO_HOSTS_BASE_ARGS:-} \
   >"$out/base_station.log" 2>&1 &
 run_in "$ns_a" "$addr_a" roslaunch scale_drift_slam robot.launch \
   master_uri:="http://$master_addr:$port" address:="$addr_a" image_queue_size:=100 output:=log \
+  ${TWO_HOSTS_ROBOT_ARGS:-} \
   >"$out/robot.log" 2>&1 &
 
 if [[ "$outage" != 0 ]]; then

@@ -74,22 +74,32 @@ class Recorder(object):
         self.images[round(msg.header.stamp.to_sec(), KEY)] = time.time()
 
 
-def subscribed(topic, node):
-    """Whether the master lists `node` as a subscriber of `topic`."""
+def subscriptions(node):
+    """The topics the master lists `node` as a subscriber of."""
     try:
         _, subscribers, _ = rosgraph.Master('/two_hosts_check').getSystemState()
     except Exception:
-        return False
-    return any(t == topic and node in nodes for t, nodes in subscribers)
+        return []
+    return [t for t, nodes in subscribers if node in nodes]
 
 
 def wait_for_nodes():
+    """The base station's nodes subscribed to the robot's keyframes (directly or through the
+    base station's relay), the tracker to the images and map updates."""
     rospy.wait_for_service('/mapping_node/save_trajectory', timeout=180)
-    for topic, node in (('/camera/image_raw', '/tracking_node'), ('/keyframes', '/mapping_node'),
-                        ('/keyframes', '/loop_closure_node'),
-                        ('/map_updates', '/tracking_node')):
-        if not sds.wait_until(lambda: subscribed(topic, node), 180):
+    keyframes = []
+    sds.wait_until(lambda: keyframes.extend(
+        t for t in subscriptions('/mapping_node') if t.endswith('keyframes')) or keyframes, 180)
+    if not keyframes:
+        raise SystemExit('FAIL: mapping_node subscribed to no keyframes')
+    wanted = [(keyframes[0], '/loop_closure_node'), ('/camera/image_raw', '/tracking_node'),
+              ('/map_updates', '/tracking_node')]
+    if keyframes[0] != '/keyframes':
+        wanted.append(('/keyframes', '/keyframe_relay'))
+    for topic, node in wanted:
+        if not sds.wait_until(lambda: topic in subscriptions(node), 180):
             raise SystemExit('FAIL: %s never subscribed to %s' % (node, topic))
+    print('the base station receives the keyframes on ' + keyframes[0])
     time.sleep(3.0)  # the subscriptions connect (over the link)
 
 
