@@ -4,9 +4,11 @@
 # and the base station (namespace B, 10.200.0.2: the ROS master, mapping_node and
 # loop_closure_node via launch/base_station.launch), each side with ROS_MASTER_URI / ROS_IP /
 # ROS_HOSTNAME set as a user sets them on two machines. The link is shaped in both directions:
-# tc netem (30 ms delay, 1 % loss, 20 Mbit/s) where the kernel has sch_netem, else tc tbf (20
-# Mbit/s only: said on the output, never pretended). With --outage S the link is cut for S
-# seconds mid-run (every packet dropped both ways: a pfifo of length 0, the link itself stays up).
+# 30 ms delay, 1 % loss, 20 Mbit/s, by tc netem where the kernel has sch_netem; else (said on the
+# output) by tc tbf for the rate and link_emulator.py, a user-space forwarder in a third namespace
+# between the two, for the delay and loss (TWO_HOSTS_EMULATOR=false: the rate only). With
+# --outage S the link is cut for S seconds mid-run (every packet dropped both ways: a pfifo of
+# length 0 on both ends, the link itself stays up).
 # two_hosts_check.py plays courtyard_loop on the robot side and asserts: every frame tracked, the
 # loop closed, ATE within 0.5 % of the path, every keyframe the tracker published in the mapper's
 # map (~save_trajectory), no keyframe gap reported by the mapper.
@@ -44,6 +46,7 @@ command -v roslaunch >/dev/null || { echo "FAIL: roslaunch not found: run with t
 tag="$$"
 ns_a="sds_robot_$tag"
 ns_b="sds_base_$tag"
+ns_link="sds_link_$tag"  # the link emulator's, without netem
 dev_a="sdsr$tag"
 dev_b="sdsb$tag"
 addr_a=10.200.0.1
@@ -54,19 +57,21 @@ export ROS_HOME="${ROS_HOME:-${SDS_TEST_OUTPUT_DIR:-$PWD}/two_hosts_ros_home}"
 rm -rf "$out" && mkdir -p "$out"
 export ROS_LOG_DIR="$out/log"
 
+namespaces=("$ns_a" "$ns_b")
 cleanup() {
   local status=$?
   trap - EXIT INT TERM
-  for ns in "$ns_a" "$ns_b"; do
+  for ns in "${namespaces[@]}"; do
     ip netns pids "$ns" 2>/dev/null | while read -r pid; do kill -INT "$pid" 2>/dev/null; done
   done
   sleep 2
-  for ns in "$ns_a" "$ns_b"; do
+  for ns in "${namespaces[@]}"; do
     ip netns pids "$ns" 2>/dev/null | while read -r pid; do kill -KILL "$pid" 2>/dev/null; done
     ip netns del "$ns" 2>/dev/null
   done
   [[ -n "${outage_pid:-}" ]] && kill "$outage_pid" 2>/dev/null
-  log "namespaces $ns_a and $ns_b removed"
+  [[ -s "$out/link_emulator.log" ]] && log "$(tail -n 1 "$out/link_emulator.log")"
+  log "namespaces ${namespaces[*]} removed"
   exit "$status"
 }
 trap cleanup EXIT
@@ -75,20 +80,46 @@ trap 'exit 130' INT TERM
 ip netns add "$ns_a" 2>"$out/netns.err" || skip "cannot create a network namespace: $(cat "$out/netns.err")"
 ip netns add "$ns_b" || skip "cannot create a second network namespace"
 ip -n "$ns_a" link set lo up && ip -n "$ns_b" link set lo up || exit 1
-if ! ip link add "$dev_a" netns "$ns_a" type veth peer name "$dev_b" netns "$ns_b" 2>"$out/veth.err"; then
-  skip "cannot create a veth pair: $(cat "$out/veth.err")"
+
+# The link: tc netem on both ends where the kernel has it; else tc tbf (the rate) on both ends
+# and, between them in a third namespace, link_emulator.py (the delay and the loss).
+netem="netem delay 30ms loss 1% rate 20mbit limit 10000"
+tbf="tbf rate 20mbit burst 32kb latency 400ms"
+if ip netns exec "$ns_a" tc qdisc add dev lo root $netem 2>"$out/tc.err"; then
+  ip netns exec "$ns_a" tc qdisc del dev lo root
+  shaping="$netem" emulate=false
+  describe="tc qdisc $netem on both ends"
+else
+  log "tc netem is not available here ($(tr -d '\n' <"$out/tc.err") - the kernel has no sch_netem)"
+  shaping="$tbf" emulate="${TWO_HOSTS_EMULATOR:-true}"
+  describe="tc qdisc $tbf on both ends (the rate)"
+  if [[ $emulate == true ]]; then
+    describe+=", link_emulator.py in $ns_link: 30 ms delay and 1 % loss each way (user space)"
+  else
+    describe+=": NO added delay, NO random loss (TWO_HOSTS_EMULATOR=false)"
+  fi
+fi
+if [[ $emulate == true ]]; then
+  namespaces+=("$ns_link")
+  ip netns add "$ns_link" || exit 1
+  ip link add "$dev_a" netns "$ns_a" type veth peer name "sdsx$tag" netns "$ns_link" 2>"$out/veth.err" ||
+    skip "cannot create a veth pair: $(cat "$out/veth.err")"
+  ip link add "$dev_b" netns "$ns_b" type veth peer name "sdsy$tag" netns "$ns_link" || exit 1
+  ip -n "$ns_link" link set "sdsx$tag" up && ip -n "$ns_link" link set "sdsy$tag" up || exit 1
+  # One frame per TCP segment, so that the emulator's loss is per packet.
+  ip -n "$ns_a" link set "$dev_a" gso_max_segs 1 && ip -n "$ns_b" link set "$dev_b" gso_max_segs 1
+  ip netns exec "$ns_link" /usr/bin/python3 "$here/link_emulator.py" --delay-ms 30 --loss 0.01 \
+    "sdsx$tag" "sdsy$tag" >"$out/link_emulator.log" 2>&1 &
+  for _ in $(seq 1 50); do grep -q ready "$out/link_emulator.log" && break; sleep 0.2; done
+  grep -q ready "$out/link_emulator.log" || { cat "$out/link_emulator.log"; exit 1; }
+else
+  ip link add "$dev_a" netns "$ns_a" type veth peer name "$dev_b" netns "$ns_b" 2>"$out/veth.err" ||
+    skip "cannot create a veth pair: $(cat "$out/veth.err")"
 fi
 ip -n "$ns_a" addr add "$addr_a/30" dev "$dev_a" && ip -n "$ns_b" addr add "$addr_b/30" dev "$dev_b" &&
   ip -n "$ns_a" link set "$dev_a" up && ip -n "$ns_b" link set "$dev_b" up || exit 1
 
-# The shaping of one direction (the egress of each end): netem where there is one, else tbf.
-shaping="netem delay 30ms loss 1% rate 20mbit limit 10000"
-if ! ip netns exec "$ns_a" tc qdisc replace dev "$dev_a" root $shaping 2>"$out/tc.err"; then
-  log "tc netem is not available here ($(tr -d '\n' <"$out/tc.err"): the kernel has no sch_netem);" \
-    "the link is shaped with tbf to 20 Mbit/s only: NO added delay, NO random loss"
-  shaping="tbf rate 20mbit burst 32kb latency 400ms"
-fi
-shape() {
+shape() {  # the egress of each end
   ip netns exec "$ns_a" tc qdisc replace dev "$dev_a" root $shaping &&
     ip netns exec "$ns_b" tc qdisc replace dev "$dev_b" root $shaping
 }
@@ -97,7 +128,7 @@ cut_link() {  # every packet dropped both ways; the interfaces stay up (a radio 
     ip netns exec "$ns_b" tc qdisc replace dev "$dev_b" root pfifo limit 0
 }
 shape || exit 1
-log "link $addr_a ($ns_a) <-> $addr_b ($ns_b) shaped both ways: tc qdisc $shaping"
+log "link $addr_a ($ns_a) <-> $addr_b ($ns_b): $describe"
 
 run_in() {  # run_in NS ADDRESS command...: one side's ROS environment, as on its own machine
   local ns="$1" address="$2"
@@ -141,7 +172,7 @@ fi
 
 checker=(/usr/bin/python3 "$here/two_hosts_check.py" --out "$out" --outage "$outage")
 [[ -n "$figures" ]] && checker+=(--figures "$figures" --link-device "$dev_a"
-  --mode "$([[ $one_host == true ]] && echo one_host || echo two_hosts)" --shaping "$shaping")
+  --mode "$([[ $one_host == true ]] && echo one_host || echo two_hosts)" --shaping "$describe")
 run_in "$ns_a" "$addr_a" "${checker[@]}"
 status=$?
 if [[ $status != 0 ]]; then
