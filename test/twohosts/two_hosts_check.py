@@ -62,12 +62,13 @@ class Recorder(object):
     def _keyframe(self, raw):
         msg = Keyframe().deserialize(raw._buff)
         self.keyframes.append((time.time(), len(raw._buff), msg.id,
-                               round(msg.header.stamp.to_sec(), KEY), msg.session))
+                               round(msg.header.stamp.to_sec(), KEY), msg.session,
+                               len(msg.image.data)))
 
     def _update(self, raw):
         msg = MapUpdate().deserialize(raw._buff)
         self.updates.append((time.time(), len(raw._buff), msg.header.stamp.to_sec(),
-                             msg.has_loop_correction))
+                             msg.has_loop_correction, len(msg.point_ids)))
 
     def _image(self, raw):
         msg = Image().deserialize(raw._buff)
@@ -197,10 +198,14 @@ def figures(rec, args, played, link):
         'pose_latency_ms': {'median': statistics.median(latency),
                             'p95': percentile(latency, 0.95), 'max': max(latency)},
         'keyframes': len(keyframe_sizes),
-        'keyframe_bytes': {'mean': statistics.mean(keyframe_sizes), 'max': max(keyframe_sizes)},
+        'keyframe_bytes': {'mean': statistics.mean(keyframe_sizes), 'max': max(keyframe_sizes),
+                           'image_mean': statistics.mean(k[5] for k in rec.keyframes)},
         'map_updates': len(update_sizes),
         'map_update_bytes': {'mean': statistics.mean(update_sizes), 'max': max(update_sizes),
-                             'median': statistics.median(update_sizes)},
+                             'median': statistics.median(update_sizes),
+                             'loop_correction': [u[1] for u in rec.updates if u[3]],
+                             'largest_five': sorted(((u[1], u[4], i) for i, u in
+                                                     enumerate(rec.updates)), reverse=True)[:5]},
         'played_s': played,
     }
     if link:
