@@ -77,6 +77,12 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
+# Namespaces a killed run of this script left (its pid is gone): their processes were its own.
+for stale in $(ip netns list 2>/dev/null | grep -oE '^sds_(robot|base|link)_[0-9]+'); do
+  kill -0 "${stale##*_}" 2>/dev/null && continue
+  ip netns pids "$stale" | while read -r pid; do kill -KILL "$pid" 2>/dev/null; done
+  ip netns del "$stale" && log "removed $stale, left by a run that was killed"
+done
 ip netns add "$ns_a" 2>"$out/netns.err" || skip "cannot create a network namespace: $(cat "$out/netns.err")"
 ip netns add "$ns_b" || skip "cannot create a second network namespace"
 ip -n "$ns_a" link set lo up && ip -n "$ns_b" link set lo up || exit 1
