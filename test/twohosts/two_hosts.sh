@@ -16,6 +16,7 @@
 # Usage: two_hosts.sh [--outage SECONDS] [--one-host] [--figures FILE]
 #   --one-host   everything in namespace A on its own address (the bench's baseline, no link)
 #   --figures    write the measured figures (JSON) there (scripts/bench twohosts)
+# OUTAGE_AFTER: seconds into the bag when the outage starts (10).
 # TWO_HOSTS_ROBOT_ARGS / TWO_HOSTS_BASE_ARGS: more arguments of robot.launch / base_station.launch
 # (experiments, e.g. keyframe_publish_queue_size:=20, relay_keyframes:=false).
 # Exits 77 (ctest SKIP_RETURN_CODE) with "SKIP: why" where namespaces cannot be made (not root,
@@ -61,6 +62,7 @@ namespaces=("$ns_a" "$ns_b")
 cleanup() {
   local status=$?
   trap - EXIT INT TERM
+  [[ -n "${outage_pid:-}" ]] && kill "$outage_pid" 2>/dev/null
   for ns in "${namespaces[@]}"; do
     ip netns pids "$ns" 2>/dev/null | while read -r pid; do kill -INT "$pid" 2>/dev/null; done
   done
@@ -69,7 +71,6 @@ cleanup() {
     ip netns pids "$ns" 2>/dev/null | while read -r pid; do kill -KILL "$pid" 2>/dev/null; done
     ip netns del "$ns" 2>/dev/null
   done
-  [[ -n "${outage_pid:-}" ]] && kill "$outage_pid" 2>/dev/null
   [[ -s "$out/link_emulator.log" ]] && log "$(tail -n 1 "$out/link_emulator.log")"
   log "namespaces ${namespaces[*]} removed"
   exit "$status"
