@@ -9,7 +9,8 @@ import sys
 def row(name, f):
     link = f.get('link', {}) if f['mode'] != 'one_host' else {}  # no link: every node local
     lat = f['pose_latency_ms']
-    return '| %s | %.1f | %.0f / %.0f / %.0f | %d x %.0f kB | %d x %.1f kB (median %.1f, max %.0f) | %s | %s | %s | %s |' % (
+    return ('| %s | %.1f | %.0f / %.0f / %.0f | %d x %.0f kB '
+            '| %d x %.1f kB (median %.1f, max %.0f) | %s | %s | %s | %s |') % (
         name, f['tracking_rate_hz'], lat['median'], lat['p95'], lat['max'], f['keyframes'],
         f['keyframe_bytes']['mean'] / 1e3, f['map_updates'], f['map_update_bytes']['mean'] / 1e3,
         f['map_update_bytes']['median'] / 1e3, f['map_update_bytes']['max'] / 1e3,
@@ -23,8 +24,8 @@ def row(name, f):
 
 def main():
     out, runs = sys.argv[1], sys.argv[2:]
-    lines = ['| run | tracking rate (Hz) | pose latency median / p95 / max (ms) | keyframes x mean size '
-             '| map updates x mean size | link robot -> base / base -> robot (Mbit/s) | loop '
+    lines = ['| run | tracking rate (Hz) | pose latency median / p95 / max (ms) | keyframes x mean '
+             'size | map updates x mean size | link robot -> base / base -> robot (Mbit/s) | loop '
              'keyframe -> correction at the robot (s) | catch-up after the outage (s) | keyframes '
              'during the outage |', '|' + '---|' * 9]
     shaping = []

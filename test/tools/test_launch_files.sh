@@ -81,7 +81,8 @@ for name, address, node in (('robot.launch', '10.0.0.2', 'tracking_node'),
     assert env == {'ROS_MASTER_URI': 'http://10.0.0.1:11311', 'ROS_IP': address,
                    'ROS_HOSTNAME': address}, '%s: %s' % (name, env)
     if node == 'mapping_node':
-        assert ['keyframes', '/base_station/keyframes'] in list(map(list, n.remap_args)), n.remap_args
+        assert ['keyframes', '/base_station/keyframes'] in list(map(list, n.remap_args)), \
+            n.remap_args
     else:
         assert ['image', '/camera/image_raw'] in list(map(list, n.remap_args)), n.remap_args
 

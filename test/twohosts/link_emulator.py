@@ -53,9 +53,9 @@ class Stats(object):
 
     def report(self, delay_ms, loss):
         late = sorted(self.lateness) or [0.0]
-        return ('link emulator (delay %.0f ms, loss %.1f %%): %d frames / %d bytes one way, %d / %d '
-                'the other; dropped %d and %d; %d send errors; lateness against the due time: '
-                'median %.2f ms, 99th percentile %.2f ms, max %.2f ms' % (
+        return ('link emulator (delay %.0f ms, loss %.1f %%): %d frames / %d bytes one way, '
+                '%d / %d the other; dropped %d and %d; %d send errors; lateness against the due '
+                'time: median %.2f ms, 99th percentile %.2f ms, max %.2f ms' % (
                     delay_ms, 100 * loss, self.frames[0], self.bytes[0], self.frames[1],
                     self.bytes[1], self.dropped[0], self.dropped[1], self.send_errors,
                     1e3 * late[len(late) // 2], 1e3 * late[int(0.99 * (len(late) - 1))],

@@ -42,7 +42,8 @@ log() { echo "[two_hosts $(date -u +%H:%M:%S)] $*"; }
 [[ "$(id -u)" == 0 ]] || skip "network namespaces need root (running as uid $(id -u))"
 command -v ip >/dev/null || skip "no 'ip' command (iproute2)"
 command -v tc >/dev/null || skip "no 'tc' command (iproute2)"
-command -v roslaunch >/dev/null || { echo "FAIL: roslaunch not found: run with the devel env.sh"; exit 1; }
+command -v roslaunch >/dev/null ||
+  { echo "FAIL: roslaunch not found: run with the devel env.sh"; exit 1; }
 
 tag="$$"
 ns_a="sds_robot_$tag"
@@ -53,7 +54,8 @@ dev_b="sdsb$tag"
 addr_a=10.200.0.1
 addr_b=10.200.0.2
 port=11311  # the namespaces have their own ports: no clash with other masters
-out="${SDS_TEST_OUTPUT_DIR:-$PWD}/two_hosts_$([[ $one_host == true ]] && echo one_host || echo "outage$outage")"
+run_name="$([[ $one_host == true ]] && echo one_host || echo "outage$outage")"
+out="${SDS_TEST_OUTPUT_DIR:-$PWD}/two_hosts_$run_name"
 export ROS_HOME="${ROS_HOME:-${SDS_TEST_OUTPUT_DIR:-$PWD}/two_hosts_ros_home}"
 rm -rf "$out" && mkdir -p "$out"
 export ROS_LOG_DIR="$out/log"
@@ -84,7 +86,8 @@ for stale in $(ip netns list 2>/dev/null | grep -oE '^sds_(robot|base|link)_[0-9
   ip netns pids "$stale" | while read -r pid; do kill -KILL "$pid" 2>/dev/null; done
   ip netns del "$stale" && log "removed $stale, left by a run that was killed"
 done
-ip netns add "$ns_a" 2>"$out/netns.err" || skip "cannot create a network namespace: $(cat "$out/netns.err")"
+ip netns add "$ns_a" 2>"$out/netns.err" ||
+  skip "cannot create a network namespace: $(cat "$out/netns.err")"
 ip netns add "$ns_b" || skip "cannot create a second network namespace"
 ip -n "$ns_a" link set lo up && ip -n "$ns_b" link set lo up || exit 1
 
@@ -109,7 +112,8 @@ fi
 if [[ $emulate == true ]]; then
   namespaces+=("$ns_link")
   ip netns add "$ns_link" || exit 1
-  ip link add "$dev_a" netns "$ns_a" type veth peer name "sdsx$tag" netns "$ns_link" 2>"$out/veth.err" ||
+  ip link add "$dev_a" netns "$ns_a" type veth peer name "sdsx$tag" netns "$ns_link" \
+    2>"$out/veth.err" ||
     skip "cannot create a veth pair: $(cat "$out/veth.err")"
   ip link add "$dev_b" netns "$ns_b" type veth peer name "sdsy$tag" netns "$ns_link" || exit 1
   ip -n "$ns_link" link set "sdsx$tag" up && ip -n "$ns_link" link set "sdsy$tag" up || exit 1
@@ -123,7 +127,8 @@ else
   ip link add "$dev_a" netns "$ns_a" type veth peer name "$dev_b" netns "$ns_b" 2>"$out/veth.err" ||
     skip "cannot create a veth pair: $(cat "$out/veth.err")"
 fi
-ip -n "$ns_a" addr add "$addr_a/30" dev "$dev_a" && ip -n "$ns_b" addr add "$addr_b/30" dev "$dev_b" &&
+ip -n "$ns_a" addr add "$addr_a/30" dev "$dev_a" &&
+  ip -n "$ns_b" addr add "$addr_b/30" dev "$dev_b" &&
   ip -n "$ns_a" link set "$dev_a" up && ip -n "$ns_b" link set "$dev_b" up || exit 1
 
 shape() {  # the egress of each end
@@ -159,7 +164,8 @@ run_in "$ns_a" "$addr_a" rosparam get /use_sim_time >/dev/null 2>&1 ||
 log "master up at http://$master_addr:$port ($master_ns)"
 
 run_in "$base_ns" "$base_addr" roslaunch scale_drift_slam base_station.launch \
-  master_uri:="http://$master_addr:$port" address:="$base_addr" output:=log ${TWO_HOSTS_BASE_ARGS:-} \
+  master_uri:="http://$master_addr:$port" address:="$base_addr" output:=log \
+  ${TWO_HOSTS_BASE_ARGS:-} \
   >"$out/base_station.log" 2>&1 &
 run_in "$ns_a" "$addr_a" roslaunch scale_drift_slam robot.launch \
   master_uri:="http://$master_addr:$port" address:="$addr_a" image_queue_size:=100 output:=log \
