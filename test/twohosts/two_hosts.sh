@@ -162,6 +162,20 @@ done
 run_in "$ns_a" "$addr_a" rosparam get /use_sim_time >/dev/null 2>&1 ||
   { echo "FAIL: the master at http://$master_addr:$port is not reachable from $ns_a"; exit 1; }
 log "master up at http://$master_addr:$port ($master_ns)"
+if [[ $one_host == false && ( $emulate == true || $shaping == netem* ) ]]; then
+  # The link delays: a TCP handshake with the master takes a round trip (>= 60 ms), never less.
+  rtt_ms="$(run_in "$ns_a" "$addr_a" /usr/bin/python3 -c '
+import socket, sys, time
+times = []
+for _ in range(5):
+    start = time.monotonic()
+    socket.create_connection((sys.argv[1], int(sys.argv[2])), timeout=10).close()
+    times.append(time.monotonic() - start)
+print("%.1f" % (1e3 * min(times)))' "$master_addr" "$port")"
+  log "round trip robot -> base station (TCP handshake, best of 5): $rtt_ms ms"
+  /usr/bin/python3 -c "import sys; sys.exit(float(sys.argv[1]) < 55.0)" "${rtt_ms:-0}" ||
+    { echo "FAIL: the link does not delay (round trip $rtt_ms ms, expected >= 60 ms)"; exit 1; }
+fi
 
 run_in "$base_ns" "$base_addr" roslaunch scale_drift_slam base_station.launch \
   master_uri:="http://$master_addr:$port" address:="$base_addr" output:=log \
