@@ -8,7 +8,9 @@
 // session are refused. Services: ~save_trajectory (TUM file of the keyframes), ~reset (a new, empty
 // map). Everything runs on the main thread, one message at a time, so the map needs no lock.
 
+#include <optional>
 #include <random>
+#include <utility>
 
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
@@ -55,6 +57,7 @@ class MappingNode {
       ROS_ERROR_THROTTLE(5, "keyframe %u refused: %s", msg->id, e.what());
       return;
     }
+    warnOfMissingKeyframes(*msg);
     const bool had_map = endpoint_.map().numKeyframes() > 0;
     std::string camera;  // described when the keyframe starts a map
     const ros::WallTime start = ros::WallTime::now();
@@ -91,6 +94,19 @@ class MappingNode {
       ROS_INFO("map: %zu keyframes, %zu points (keyframe %u, window BA %.1f ms)",
                endpoint_.map().numKeyframes(), endpoint_.map().numPoints(), msg->id, ms);
     }
+  }
+
+  /// Keyframe ids of a session are consecutive: a gap is keyframes lost on the way (a link
+  /// outage longer than the tracking node's ~keyframe_publish_queue_size covers).
+  void warnOfMissingKeyframes(const scale_drift_slam::Keyframe& msg) {
+    if (last_keyframe_ && last_keyframe_->first == msg.session &&
+        msg.id > last_keyframe_->second + 1) {
+      ROS_WARN(
+          "keyframes %u to %u of session %u never arrived (dropped on the way: a link "
+          "outage longer than the tracking node's ~keyframe_publish_queue_size covers?)",
+          last_keyframe_->second + 1, msg.id - 1, msg.session);
+    }
+    last_keyframe_ = std::make_pair(msg.session, msg.id);
   }
 
   void onLoopConstraint(const scale_drift_slam::Sim3ConstraintConstPtr& msg) {
@@ -196,6 +212,7 @@ class MappingNode {
   /// The map and its session rule (system/mapper_endpoint.h), as SlamSystem's mapping thread has.
   system::MapperEndpoint endpoint_;
   ros::Time last_stamp_;
+  std::optional<std::pair<std::uint32_t, std::uint32_t>> last_keyframe_;  ///< session, id
 };
 
 }  // namespace

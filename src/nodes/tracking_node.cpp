@@ -43,7 +43,8 @@ class TrackingNode {
     answer_sub_ =
         subscribeToInbox(nh, "relocalisation_answers", 5,
                          &ros_conversions::fromRelocalisationAnswerMsg, "a relocalisation answer");
-    keyframe_pub_ = nh.advertise<scale_drift_slam::Keyframe>("keyframes", 20);
+    keyframe_pub_ =
+        nh.advertise<scale_drift_slam::Keyframe>("keyframes", params_.keyframe_publish_queue_size);
     request_pub_ =
         nh.advertise<scale_drift_slam::RelocalisationRequest>("relocalisation_requests", 2);
     status_pub_ = nh.advertise<scale_drift_slam::TrackingStatus>("tracking_status", 10);

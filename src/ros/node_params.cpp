@@ -168,6 +168,7 @@ void readFrames(Reader& reader, FrameNames* frames) {
 void TrackingNodeParams::validate() const {
   check(!transport.empty(), "transport", "must not be empty (raw or compressed)");
   check(image_queue_size >= 1, "image_queue_size", "must be >= 1");
+  check(keyframe_publish_queue_size >= 1, "keyframe_publish_queue_size", "must be >= 1");
   check(path_publish_every >= 1, "path_publish_every", "must be >= 1");
   check(path_max_poses >= 1, "path_max_poses", "must be >= 1");
   check(std::isfinite(time_jump_restart_s) && time_jump_restart_s >= 0.0, "time_jump_restart_s",
@@ -237,6 +238,7 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   reader.read("calibration_file", &p.calibration_file);
   reader.read("transport", &p.transport);
   reader.read("image_queue_size", &p.image_queue_size);
+  reader.read("keyframe_publish_queue_size", &p.keyframe_publish_queue_size);
   readFrames(reader, &p.frames);
   reader.read("map_z_up", &p.map_z_up);
   reader.read("publish_optical_transform", &p.publish_optical_transform);
@@ -302,8 +304,9 @@ std::string describe(const TrackingNodeConfig& c) {
       << (p.calibration_file.empty() ? "(none: CameraInfo)" : p.calibration_file) << "\n";
   if (c.calibration) out << "camera: " << c.calibration->describe() << "\n";
   out << "transport: " << p.transport << "\nimage_queue_size: " << p.image_queue_size
-      << "\nframes: map " << p.frames.map << ", odom " << p.frames.odom << ", camera "
-      << p.frames.camera << ", optical " << p.frames.optical << "\nmap_z_up: " << p.map_z_up
+      << "\nkeyframe_publish_queue_size: " << p.keyframe_publish_queue_size << "\nframes: map "
+      << p.frames.map << ", odom " << p.frames.odom << ", camera " << p.frames.camera
+      << ", optical " << p.frames.optical << "\nmap_z_up: " << p.map_z_up
       << "\npublish_optical_transform: " << p.publish_optical_transform
       << "\npath_publish_every: " << p.path_publish_every
       << "\npath_max_poses: " << p.path_max_poses

@@ -63,6 +63,7 @@ TEST(NodeParams, ConfigFileThenOverrides) {
   p["mapper"]["run_window_ba"] = false;
   p["map_frame"] = std::string("world");
   p["image_queue_size"] = 3;
+  p["keyframe_publish_queue_size"] = 50;
   p["something_else"] = 1;
   const TrackingNodeConfig c = trackingNodeConfig(p);
   EXPECT_EQ(c.slam.tracker.good_inliers, 60);  // from the file
@@ -74,6 +75,7 @@ TEST(NodeParams, ConfigFileThenOverrides) {
   EXPECT_FALSE(c.slam.mapper.run_window_ba);
   EXPECT_EQ(c.node.frames.map, "world");
   EXPECT_EQ(c.node.image_queue_size, 3);
+  EXPECT_EQ(c.node.keyframe_publish_queue_size, 50);
   ASSERT_EQ(c.unknown.size(), 1u);
   EXPECT_EQ(c.unknown[0], "~something_else");
   // A double written with all its digits comes back exactly.
@@ -146,6 +148,10 @@ TEST(NodeParams, BadValuesNameTheParameter) {
   p = emptyStruct();
   p["image_queue_size"] = 0;
   EXPECT_NE(tracking_error(p).find("~image_queue_size"), std::string::npos);
+  p = emptyStruct();
+  p["keyframe_publish_queue_size"] = 0;
+  EXPECT_NE(tracking_error(p).find("~keyframe_publish_queue_size: must be >= 1"), std::string::npos)
+      << tracking_error(p);
   p = emptyStruct();
   p["odom_frame"] = std::string("map");
   EXPECT_NE(tracking_error(p).find("used for two frames"), std::string::npos) << tracking_error(p);

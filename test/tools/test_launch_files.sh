@@ -62,6 +62,30 @@ for camera in ('fr1', 'fr2', 'fr3'):
                    'camera:=' + camera, 'bag:=/x.bag')
     assert params['/tracking_node/calibration_file'].endswith('config/tum_%s.yaml' % camera)
 
+# Two machines: each side's nodes get the network environment of their machine.
+euroc = os.path.join(pkg, 'config', 'euroc_cam0.yaml')
+params = check(['/tracking_node'], 'robot.launch', 'master_uri:=http://10.0.0.1:11311',
+               'address:=10.0.0.2', 'image:=/cam0/image_raw', 'calibration_file:=' + euroc)
+assert params['/tracking_node/calibration_file'] == euroc
+assert params['/tracking_node/keyframe_publish_queue_size'] == 200
+check(['/keyframe_relay', '/loop_closure_node', '/mapping_node'], 'base_station.launch',
+      'master_uri:=http://10.0.0.1:11311', 'address:=10.0.0.1')
+check(['/loop_closure_node', '/mapping_node'], 'base_station.launch', 'relay_keyframes:=false')
+for name, address, node in (('robot.launch', '10.0.0.2', 'tracking_node'),
+                            ('base_station.launch', '10.0.0.1', 'mapping_node')):
+    config = roslaunch.config.load_config_default(
+        [(os.path.join(pkg, 'launch', name),
+          ['master_uri:=http://10.0.0.1:11311', 'address:=' + address])], None, verbose=False)
+    n = next(n for n in config.nodes if n.name == node)
+    env = dict(n.env_args)
+    assert env == {'ROS_MASTER_URI': 'http://10.0.0.1:11311', 'ROS_IP': address,
+                   'ROS_HOSTNAME': address}, '%s: %s' % (name, env)
+    if node == 'mapping_node':
+        assert ['keyframes', '/base_station/keyframes'] in list(map(list, n.remap_args)), \
+            n.remap_args
+    else:
+        assert ['image', '/camera/image_raw'] in list(map(list, n.remap_args)), n.remap_args
+
 config = yaml.safe_load(open(os.path.join(pkg, 'rviz', 'slam.rviz')))
 displays = config['Visualization Manager']['Displays']
 topics = {d.get('Topic') or d.get('Marker Topic') or d.get('Image Topic') for d in displays}

@@ -32,6 +32,9 @@ struct TrackingNodeParams {
   std::string calibration_file;   ///< Calibration YAML; empty: from CameraInfo.
   std::string transport = "raw";  ///< raw, compressed, or another installed image_transport plugin.
   int image_queue_size = 5;       ///< Images waiting while a frame is tracked (older are dropped).
+  /// Keyframes roscpp keeps per subscriber while its connection stalls (a link outage: the
+  /// oldest are dropped beyond this; doc/ros.md "Running on two machines").
+  int keyframe_publish_queue_size = 200;
   FrameNames frames;
   bool map_z_up = true;  ///< map = the first camera's body axes (upright), else its optical axes.
   bool publish_optical_transform = true;  ///< Static camera -> optical transform.
