@@ -93,6 +93,14 @@ void PlaceRecognizer::add(map::KeyframeId id, double timestamp, KeyframeAppearan
   }
 }
 
+std::vector<PlaceRecognizer::Place> PlaceRecognizer::places() const {
+  std::vector<Place> places;
+  places.reserve(keyframes_.size());
+  for (const Stored& stored : keyframes_)
+    places.push_back({stored.id, stored.timestamp, &stored.appearance});
+  return places;
+}
+
 PlaceQueryResult PlaceRecognizer::queryAndAdd(map::KeyframeId id, double timestamp,
                                               KeyframeAppearance appearance,
                                               const std::unordered_set<map::KeyframeId>& excluded) {

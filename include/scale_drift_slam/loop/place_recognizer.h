@@ -59,6 +59,13 @@ struct PlaceQueryResult {
   std::string describe() const;
 };
 
+/// One keyframe of the database as a map file keeps it (system/map_snapshot.h).
+struct SavedPlace {
+  map::KeyframeId id = 0;
+  double timestamp = 0.0;
+  KeyframeAppearance appearance;
+};
+
 /// Finds earlier keyframes that show the place a new keyframe shows. Feed keyframes in order:
 /// query(k) then add(k) (or queryAndAdd). Runs in the loop-closure thread; not thread-safe. Owns
 /// the appearances of all keyframes added (about 41 kB each with 1000 keypoints) and shares the
@@ -104,6 +111,15 @@ class PlaceRecognizer {
   /// std::out_of_range for an unknown id.
   const KeyframeAppearance& appearance(map::KeyframeId id) const;
   const PlaceRecognitionParams& params() const { return params_; }
+
+  /// A keyframe of the database as added (what a map file keeps to rebuild it with add()).
+  struct Place {
+    map::KeyframeId id = 0;
+    double timestamp = 0.0;
+    const KeyframeAppearance* appearance = nullptr;  ///< Owned by the recognizer.
+  };
+  /// The keyframes added so far, in the order they were added.
+  std::vector<Place> places() const;
 
  private:
   struct Stored {
