@@ -6,7 +6,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 
 #include <cereal/archives/portable_binary.hpp>
@@ -169,14 +168,40 @@ namespace {
 constexpr char kMagic[8] = {'S', 'D', 'S', 'M', 'A', 'P', '\r', '\n'};
 constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;  // magic, version, reserved, size, sum
 
-std::uint64_t fnv1a(const char* data, std::size_t size) {
-  std::uint64_t hash = 1469598103934665603ull;
-  for (std::size_t i = 0; i < size; ++i) {
-    hash ^= static_cast<unsigned char>(data[i]);
-    hash *= 1099511628211ull;
+/// The payload's checksum: FNV-1a over little-endian 64-bit words in four interleaved lanes (each
+/// step (h ^ w) * prime is a bijection of h, so any change of one word changes its lane and the
+/// result), then the lanes, the trailing bytes and the size. Eight times fewer multiplications
+/// than bytewise FNV-1a: ~0.1 s for a 250 MB map.
+std::uint64_t checksum(const char* data, std::size_t size) {
+  constexpr std::uint64_t kOffset = 1469598103934665603ull, kPrime = 1099511628211ull;
+  std::uint64_t lane[4] = {kOffset, kOffset ^ 1, kOffset ^ 2, kOffset ^ 3};
+  std::size_t i = 0;
+  for (; i + 32 <= size; i += 32) {
+    for (int l = 0; l < 4; ++l) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, data + i + 8 * l, 8);
+#if __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+      word = __builtin_bswap64(word);
+#endif
+      lane[l] = (lane[l] ^ word) * kPrime;
+    }
   }
-  return hash;
+  std::uint64_t hash = kOffset;
+  for (const std::uint64_t value : lane)
+    hash = (hash ^ value) * kPrime;
+  for (; i < size; ++i)
+    hash = (hash ^ static_cast<unsigned char>(data[i])) * kPrime;
+  return (hash ^ size) * kPrime;
 }
+
+/// An input stream over bytes held elsewhere (no copy of a 100 MB payload).
+class MemoryBuffer : public std::streambuf {
+ public:
+  MemoryBuffer(const char* data, std::size_t size) {
+    char* begin = const_cast<char*>(data);  // read only: the get area is never written
+    setg(begin, begin, begin + size);
+  }
+};
 
 /// Little-endian fixed-width integers of the header.
 template <typename T>
@@ -254,8 +279,9 @@ std::string serialisePayload(const MapFile& file) {
   return stream.str();
 }
 
-MapFile parsePayload(const std::string& payload) {
-  std::istringstream stream(payload, std::ios::binary);
+MapFile parsePayload(const char* payload, std::size_t size) {
+  MemoryBuffer buffer(payload, size);
+  std::istream stream(&buffer);
   cereal::PortableBinaryInputArchive ar(stream);
   MapFile file;
   MapLists lists;
@@ -288,15 +314,18 @@ std::string readWhole(const std::string& path) {
   if (!in) {
     throw MapFileError(MapFileError::Kind::kUnreadable, "map file '" + path + "': cannot open");
   }
-  std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) {
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  std::string data(size > 0 ? static_cast<std::size_t>(size) : 0, '\0');
+  if (size < 0 || !in.read(data.data(), static_cast<std::streamsize>(data.size()))) {
     throw MapFileError(MapFileError::Kind::kUnreadable, "map file '" + path + "': read error");
   }
   return data;
 }
 
-/// The payload of a checked header; throws what is wrong with it.
-std::string checkedPayload(const std::string& data, const std::string& path) {
+/// The payload's size after a checked header; throws what is wrong with the header or the sum.
+std::size_t checkedPayload(const std::string& data, const std::string& path) {
   using Kind = MapFileError::Kind;
   const std::string name = "map file '" + path + "': ";
   if (data.size() < sizeof(kMagic) || std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) {
@@ -310,36 +339,35 @@ std::string checkedPayload(const std::string& data, const std::string& path) {
                                                 std::to_string(kMapFileVersion));
   }
   const auto size = getLittle<std::uint64_t>(data, 16);
-  const auto checksum = getLittle<std::uint64_t>(data, 24);
+  const auto sum = getLittle<std::uint64_t>(data, 24);
   if (data.size() - kHeaderBytes != size) {
     throw MapFileError(Kind::kTruncated,
                        name + "truncated: " + std::to_string(data.size() - kHeaderBytes) +
                            " payload bytes, the header says " + std::to_string(size));
   }
-  if (fnv1a(data.data() + kHeaderBytes, size) != checksum) {
+  if (checksum(data.data() + kHeaderBytes, size) != sum) {
     throw MapFileError(Kind::kCorrupted, name + "checksum mismatch (the file is corrupted)");
   }
-  return data.substr(kHeaderBytes);
+  return size;
 }
 
 }  // namespace
 
 void saveMapFile(const std::string& path, const MapFile& file) {
   const std::string payload = serialisePayload(file);
-  std::string data(kMagic, sizeof(kMagic));
-  putLittle<std::uint32_t>(data, kMapFileVersion);
-  putLittle<std::uint32_t>(data, 0);  // reserved
-  putLittle<std::uint64_t>(data, payload.size());
-  putLittle<std::uint64_t>(data, fnv1a(payload.data(), payload.size()));
-  data += payload;
+  std::string header(kMagic, sizeof(kMagic));
+  putLittle<std::uint32_t>(header, kMapFileVersion);
+  putLittle<std::uint32_t>(header, 0);  // reserved
+  putLittle<std::uint64_t>(header, payload.size());
+  putLittle<std::uint64_t>(header, checksum(payload.data(), payload.size()));
   namespace fs = std::filesystem;
   const fs::path target(path);
   const fs::path temporary =
       target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(getpid()));
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out || !out.write(data.data(), static_cast<std::streamsize>(data.size())) ||
-        !out.flush()) {
+    if (!out || !out.write(header.data(), static_cast<std::streamsize>(header.size())) ||
+        !out.write(payload.data(), static_cast<std::streamsize>(payload.size())) || !out.flush()) {
       std::error_code ignored;
       fs::remove(temporary, ignored);
       throw MapFileError(MapFileError::Kind::kUnreadable,
@@ -356,9 +384,10 @@ void saveMapFile(const std::string& path, const MapFile& file) {
 }
 
 MapFile loadMapFile(const std::string& path) {
-  const std::string payload = checkedPayload(readWhole(path), path);
+  const std::string data = readWhole(path);
+  const std::size_t size = checkedPayload(data, path);
   try {
-    return parsePayload(payload);
+    return parsePayload(data.data() + kHeaderBytes, size);
   } catch (const std::exception& e) {  // cereal::Exception, std::invalid_argument, bad_alloc
     throw MapFileError(MapFileError::Kind::kMalformed,
                        "map file '" + path + "': malformed content: " + e.what());
