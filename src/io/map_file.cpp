@@ -156,8 +156,18 @@ void load(Archive& ar, sds::loop::KeyframeAppearance& a) {
 }
 
 template <class Archive>
+void serialize(Archive& ar, sds::loop::BowVector& bow) {
+  ar(bow.words, bow.weights);
+}
+
+template <class Archive>
+void serialize(Archive& ar, sds::loop::FeatureGroups& groups) {
+  ar(groups.nodes, groups.features);
+}
+
+template <class Archive>
 void serialize(Archive& ar, sds::loop::SavedPlace& p) {
-  ar(p.id, p.timestamp, p.appearance);
+  ar(p.id, p.timestamp, p.appearance, p.indexed, p.bow, p.groups);
 }
 
 }  // namespace cereal

@@ -81,7 +81,7 @@ void LoopCloser::restore(
       throw std::invalid_argument("loop closer: a place of unknown keyframe " +
                                   std::to_string(place.id));
     }
-    recognizer.add(place.id, place.timestamp, std::move(place.appearance));
+    recognizer.addSaved(std::move(place));
   }
   for (const auto& entry : jpeg_images) {
     if (!map.hasKeyframe(entry.first)) {

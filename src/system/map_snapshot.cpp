@@ -99,9 +99,14 @@ MapSnapshot SlamSystem::snapshot() const {
     const loop::PlaceRecognizer& recognizer = closer->recognizer();
     if (recognizer.vocabularyReady()) saved.vocabulary = recognizer.vocabulary()->toBytes();
     for (const loop::PlaceRecognizer::Place& place : recognizer.places()) {
-      if (map.hasKeyframe(place.id)) {
-        saved.places.push_back({place.id, place.timestamp, *place.appearance});
+      if (!map.hasKeyframe(place.id)) continue;
+      loop::SavedPlace kept{place.id, place.timestamp, *place.appearance, false, {}, {}};
+      if (place.bow && place.groups) {
+        kept.indexed = true;
+        kept.bow = *place.bow;
+        kept.groups = *place.groups;
       }
+      saved.places.push_back(std::move(kept));
     }
     for (const auto& [id, jpeg] : closer->keyframeImages()) {
       if (map.hasKeyframe(id)) saved.keyframe_images.emplace(id, jpeg);

@@ -105,8 +105,15 @@ sds::io::MapFile syntheticMap(const sds::sim::SequenceParams& params,
   std::vector<cv::Mat> descriptors;
   for (int k = 0; k < 30; ++k)
     descriptors.push_back(images[static_cast<std::size_t>(k)].appearance.descriptors);
-  file.snapshot.vocabulary =
-      sds::loop::Vocabulary::train(descriptors, sds::loop::VocabularyParams{}).toBytes();
+  const sds::loop::Vocabulary vocabulary =
+      sds::loop::Vocabulary::train(descriptors, sds::loop::VocabularyParams{});
+  file.snapshot.vocabulary = vocabulary.toBytes();
+  // Every keyframe indexed, as in a map saved after the vocabulary was learned.
+  const int levels_up = sds::loop::PlaceRecognitionParams{}.geometry.group_levels_up;
+  for (sds::loop::SavedPlace& place : file.snapshot.places) {
+    place.indexed = true;
+    place.bow = vocabulary.transform(place.appearance.descriptors, place.groups, levels_up);
+  }
   for (int k = 5; k + 90 < kKeyframes; k += 100) {  // ten loops
     sds::loop::PoseGraphEdge edge;
     edge.from = static_cast<sds::map::KeyframeId>(k + 90);

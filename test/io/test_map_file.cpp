@@ -135,6 +135,11 @@ void expectSamePlaces(const std::vector<loop::SavedPlace>& a,
     EXPECT_EQ(x.keypoints, y.keypoints);
     EXPECT_EQ(x.octaves, y.octaves);
     EXPECT_TRUE(sameMat(x.descriptors, y.descriptors));
+    EXPECT_EQ(a[i].indexed, b[i].indexed);
+    EXPECT_EQ(a[i].bow.words, b[i].bow.words);
+    EXPECT_EQ(a[i].bow.weights, b[i].bow.weights);
+    EXPECT_EQ(a[i].groups.nodes, b[i].groups.nodes);
+    EXPECT_EQ(a[i].groups.features, b[i].groups.features);
   }
 }
 
@@ -175,12 +180,25 @@ TEST(MapFile, SaveThenLoadGivesBackEveryField) {
   ASSERT_FALSE(saved.snapshot.vocabulary.empty());
   ASSERT_EQ(saved.snapshot.places.size(), saved.snapshot.map.numKeyframes());
   ASSERT_EQ(saved.snapshot.keyframe_images.size(), saved.snapshot.map.numKeyframes());
+  for (const loop::SavedPlace& place : saved.snapshot.places)
+    ASSERT_TRUE(place.indexed && !place.bow.empty()) << place.id;
   const std::string path = tempPath("round_trip.map");
   saveMapFile(path, saved);
   const MapFile loaded = loadMapFile(path);
   expectSameFile(saved, loaded);
-  // The vocabulary still parses, and saving the loaded file again gives the same bytes.
-  EXPECT_GT(loop::Vocabulary::fromBytes(loaded.snapshot.vocabulary, "test").numWords(), 0u);
+  // The vocabulary still parses, the saved bags of words are the vocabulary's, and saving the
+  // loaded file again gives the same bytes.
+  const loop::Vocabulary vocabulary = loop::Vocabulary::fromBytes(loaded.snapshot.vocabulary, "t");
+  EXPECT_GT(vocabulary.numWords(), 0u);
+  for (const loop::SavedPlace& place : loaded.snapshot.places) {
+    loop::FeatureGroups groups;
+    const loop::BowVector bow =
+        vocabulary.transform(place.appearance.descriptors, groups,
+                             slamParams().loop.recognition.geometry.group_levels_up);
+    EXPECT_EQ(bow.words, place.bow.words) << place.id;
+    EXPECT_EQ(bow.weights, place.bow.weights) << place.id;
+    EXPECT_EQ(groups.features, place.groups.features) << place.id;
+  }
   const std::string again = tempPath("round_trip_again.map");
   saveMapFile(again, loaded);
   EXPECT_EQ(readBytes(path), readBytes(again));

@@ -64,6 +64,11 @@ struct SavedPlace {
   map::KeyframeId id = 0;
   double timestamp = 0.0;
   KeyframeAppearance appearance;
+  /// Its bag of words and feature groups under the database's vocabulary, when it was indexed:
+  /// restoring then skips the vocabulary descent of every descriptor.
+  bool indexed = false;
+  BowVector bow;
+  FeatureGroups groups;
 };
 
 /// Finds earlier keyframes that show the place a new keyframe shows. Feed keyframes in order:
@@ -87,6 +92,10 @@ class PlaceRecognizer {
   /// Adds a keyframe to the database. Throws std::invalid_argument on a repeated id or an
   /// invalid appearance.
   void add(map::KeyframeId id, double timestamp, KeyframeAppearance appearance);
+  /// Adds a saved keyframe: with its bag of words and groups as saved when `place.indexed` and
+  /// the vocabulary is ready (they must come from this vocabulary), else as add(). Throws
+  /// std::invalid_argument as add() does, or on words or feature indices out of range.
+  void addSaved(SavedPlace place);
   /// query() then add().
   PlaceQueryResult queryAndAdd(map::KeyframeId id, double timestamp, KeyframeAppearance appearance,
                                const std::unordered_set<map::KeyframeId>& excluded = {});
@@ -117,6 +126,8 @@ class PlaceRecognizer {
     map::KeyframeId id = 0;
     double timestamp = 0.0;
     const KeyframeAppearance* appearance = nullptr;  ///< Owned by the recognizer.
+    const BowVector* bow = nullptr;                  ///< Null before the keyframe was indexed.
+    const FeatureGroups* groups = nullptr;
   };
   /// The keyframes added so far, in the order they were added.
   std::vector<Place> places() const;
