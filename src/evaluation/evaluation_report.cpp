@@ -23,6 +23,23 @@ std::string format(const char* pattern, double a, double b = 0, double c = 0, do
 
 }  // namespace
 
+geometry::Sim3 alignmentFromJson(const nlohmann::json& report) {
+  try {
+    const nlohmann::json& a = report.at("alignment_transform");
+    const double scale = a.at("scale").get<double>();
+    const auto t = a.at("translation").get<std::vector<double>>();
+    const auto q = a.at("quaternion_xyzw").get<std::vector<double>>();
+    if (t.size() != 3 || q.size() != 4 || !(scale > 0.0)) throw std::invalid_argument("sizes");
+    return geometry::Sim3::fromScale(Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized(),
+                                     Eigen::Vector3d(t[0], t[1], t[2]), scale);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(
+        std::string("no valid alignment_transform (scale > 0, translation[3], "
+                    "quaternion_xyzw[4]) in the report: ") +
+        e.what());
+  }
+}
+
 nlohmann::json toJson(const TrajectoryEvaluation& e) {
   nlohmann::json json;
   json["alignment"] = alignmentModeName(e.alignment);

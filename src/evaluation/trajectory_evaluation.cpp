@@ -225,7 +225,9 @@ TrajectoryEvaluation evaluateTrajectory(std::vector<io::StampedPose> truth,
     truth_poses.push_back(truth[t].T_world_cam);
     estimate_poses.push_back(estimate[e].T_world_cam);
   }
-  result.S_truth_estimate = align(estimate_positions, result.truth_positions, params.alignment);
+  result.S_truth_estimate =
+      params.given_alignment ? *params.given_alignment
+                             : align(estimate_positions, result.truth_positions, params.alignment);
   for (size_t i = 0; i < pairs.size(); ++i) {
     result.aligned_positions.push_back(result.S_truth_estimate * estimate_positions[i]);
     result.ate_errors.push_back((result.aligned_positions[i] - result.truth_positions[i]).norm());

@@ -69,6 +69,33 @@ LoopCloser::LoopCloser(std::shared_ptr<const geometry::CameraModel> camera, Loop
   if (!camera_) throw std::invalid_argument("loop closer: a camera model is needed");
 }
 
+void LoopCloser::restore(
+    map::Map map, std::shared_ptr<const Vocabulary> vocabulary, std::vector<SavedPlace> places,
+    std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>> jpeg_images) {
+  if (map_.numKeyframes() != 0 || recognizer_.size() != 0) {
+    throw std::logic_error("loop closer: a map can only be restored into a new loop closer");
+  }
+  PlaceRecognizer recognizer(params_.recognition, std::move(vocabulary));
+  for (SavedPlace& place : places) {
+    if (!map.hasKeyframe(place.id)) {
+      throw std::invalid_argument("loop closer: a place of unknown keyframe " +
+                                  std::to_string(place.id));
+    }
+    recognizer.addSaved(std::move(place));
+  }
+  for (const auto& entry : jpeg_images) {
+    if (!map.hasKeyframe(entry.first)) {
+      throw std::invalid_argument("loop closer: an image of unknown keyframe " +
+                                  std::to_string(entry.first));
+    }
+  }
+  recognizer_ = std::move(recognizer);
+  map_ = std::move(map);
+  jpeg_images_ = std::move(jpeg_images);
+  map_version_ = 0;
+  corrections_ = map::CorrectionHistory();
+}
+
 void LoopCloser::storeKeyframe(const map::KeyframeMessage& message) {
   map::addKeyframeMessage(message, map_);
   if (!message.image.empty()) {

@@ -1,5 +1,7 @@
 #include "scale_drift_slam/loop/place_recognizer.h"
 
+#include <cmath>
+
 #include <algorithm>
 #include <cstdio>
 #include <limits>
@@ -91,6 +93,55 @@ void PlaceRecognizer::add(map::KeyframeId id, double timestamp, KeyframeAppearan
   } else if (static_cast<int>(keyframes_.size()) >= params_.online_training_keyframes) {
     trainOnlineVocabulary();
   }
+}
+
+std::vector<PlaceRecognizer::Place> PlaceRecognizer::places() const {
+  std::vector<Place> places;
+  places.reserve(keyframes_.size());
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+    const Stored& stored = keyframes_[i];
+    const bool indexed = vocabulary_ && i < database_.size();
+    places.push_back({stored.id, stored.timestamp, &stored.appearance,
+                      indexed ? &database_.document(i) : nullptr,
+                      indexed ? &stored.groups : nullptr});
+  }
+  return places;
+}
+
+void PlaceRecognizer::addSaved(SavedPlace place) {
+  if (!place.indexed || !vocabulary_ || database_.size() != keyframes_.size()) {
+    add(place.id, place.timestamp, std::move(place.appearance));
+    return;
+  }
+  if (contains(place.id)) {
+    throw std::invalid_argument("place recognizer: keyframe " + std::to_string(place.id) +
+                                " was already added");
+  }
+  place.appearance.validate();
+  const std::string name = "place recognizer: saved keyframe " + std::to_string(place.id);
+  const BowVector& bow = place.bow;
+  if (bow.words.size() != bow.weights.size()) throw std::invalid_argument(name + ": bad bag");
+  for (std::size_t i = 0; i < bow.words.size(); ++i) {
+    if (bow.words[i] >= vocabulary_->numWords() || (i > 0 && bow.words[i] <= bow.words[i - 1]) ||
+        !std::isfinite(bow.weights[i]) || bow.weights[i] < 0.0f) {
+      throw std::invalid_argument(name + ": a word out of range or order");
+    }
+  }
+  const FeatureGroups& groups = place.groups;
+  if (groups.nodes.size() != groups.features.size()) {
+    throw std::invalid_argument(name + ": bad feature groups");
+  }
+  for (const std::vector<int>& features : groups.features) {
+    for (const int f : features) {
+      if (f < 0 || static_cast<std::size_t>(f) >= place.appearance.size()) {
+        throw std::invalid_argument(name + ": a grouped feature out of range");
+      }
+    }
+  }
+  index_of_[place.id] = keyframes_.size();
+  keyframes_.push_back(
+      Stored{place.id, place.timestamp, std::move(place.appearance), std::move(place.groups)});
+  database_.add(bow);
 }
 
 PlaceQueryResult PlaceRecognizer::queryAndAdd(map::KeyframeId id, double timestamp,

@@ -134,7 +134,7 @@ BowVector Vocabulary::transform(const cv::Mat& descriptors, FeatureGroups& group
   return bow;
 }
 
-void Vocabulary::save(const std::string& path) const {
+std::string Vocabulary::toBytes() const {
   if (empty()) throw std::runtime_error("vocabulary: cannot save an empty vocabulary");
   std::string out(kMagic, sizeof(kMagic));
   const std::uint32_t header[5] = {
@@ -149,6 +149,11 @@ void Vocabulary::save(const std::string& path) const {
   append(out, idf_.data(), idf_.size());
   const std::uint64_t checksum = fnv1a(out.data(), out.size());
   append(out, &checksum, 1);
+  return out;
+}
+
+void Vocabulary::save(const std::string& path) const {
+  const std::string out = toBytes();
   std::ofstream file(path, std::ios::binary);
   if (!file || !file.write(out.data(), static_cast<std::streamsize>(out.size()))) {
     throw std::runtime_error("vocabulary " + path + ": cannot write");
@@ -159,7 +164,11 @@ Vocabulary Vocabulary::load(const std::string& path) {
   std::ifstream file(path, std::ios::binary);
   if (!file) throw std::runtime_error("vocabulary " + path + ": cannot open");
   const std::string data((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  Reader reader(data, path);
+  return fromBytes(data, path);
+}
+
+Vocabulary Vocabulary::fromBytes(const std::string& data, const std::string& origin) {
+  Reader reader(data, origin);
   char magic[sizeof(kMagic)];
   reader.read(magic, sizeof(kMagic));
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) reader.fail("not a vocabulary file");
@@ -191,7 +200,7 @@ Vocabulary Vocabulary::load(const std::string& path) {
   std::uint64_t checksum = 0;
   reader.read(&checksum, 1);
   if (checksum != fnv1a(data.data(), payload)) reader.fail("checksum mismatch (corrupted)");
-  vocabulary.checkConsistency(path);
+  vocabulary.checkConsistency(origin);
   return vocabulary;
 }
 

@@ -48,6 +48,13 @@ Mapper::Mapper(const MapperParams& params, double focal_length_px)
     throw std::invalid_argument("mapper needs a positive focal length");
 }
 
+Mapper::Mapper(const MapperParams& params, double focal_length_px, map::Map map,
+               std::vector<loop::PoseGraphEdge> loop_edges)
+    : Mapper(params, focal_length_px) {
+  map_ = std::move(map);
+  loop_edges_ = std::move(loop_edges);
+}
+
 map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
                                    features::BundleStatistics* statistics) {
   corrections_.bringUpToDate(message);

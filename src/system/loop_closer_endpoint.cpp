@@ -64,6 +64,17 @@ LoopCloserEndpoint::UpdateOutcome LoopCloserEndpoint::applyMapUpdate(const Envel
   return outcome;
 }
 
+void LoopCloserEndpoint::restore(
+    std::uint32_t session, std::shared_ptr<const geometry::CameraModel> camera, map::Map map,
+    std::shared_ptr<const loop::Vocabulary> vocabulary, std::vector<loop::SavedPlace> places,
+    std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>> jpeg_images) {
+  loop::LoopCloser closer(std::move(camera), params_);
+  closer.restore(std::move(map), std::move(vocabulary), std::move(places), std::move(jpeg_images));
+  closer_.emplace(std::move(closer));
+  session_ = session;
+  versions_.reset();
+}
+
 Addressed<map::RelocalisationAnswer> LoopCloserEndpoint::relocalise(
     const Envelope& from, const map::RelocalisationRequest& request) {
   if (!isCurrent(from.session)) {

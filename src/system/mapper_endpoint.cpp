@@ -64,6 +64,12 @@ MapperEndpoint::LoopOutcome MapperEndpoint::closeLoop(const Envelope& from,
   return outcome;
 }
 
+void MapperEndpoint::restore(std::uint32_t session, double focal_length_px, map::Map map,
+                             std::vector<loop::PoseGraphEdge> loop_edges) {
+  mapper_.emplace(params_, focal_length_px, std::move(map), std::move(loop_edges));
+  session_ = session;
+}
+
 void MapperEndpoint::reset(std::uint32_t new_mapper_id) {
   mapper_.reset();
   mapper_id_ = new_mapper_id;

@@ -57,6 +57,7 @@ void SlamSystem::finish() {
 
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
                                                features::PixelEncoding encoding) {
+  started_ = true;
   tracker_inbox_.drain(tracker_, trajectory_);
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
   if (result.map_restarted) {

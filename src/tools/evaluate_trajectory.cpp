@@ -29,7 +29,10 @@ const char* kUsage =
     "  --plot FILE          write a PNG: top view and error over time\n"
     "  --max-dt S           association tolerance in seconds (default 0.02)\n"
     "  --rpe-distances LIST metres along the true path (default 1,2,5,10)\n"
-    "  --segments N         segments for the scale drift (default 10)\n";
+    "  --segments N         segments for the scale drift (default 10)\n"
+    "  --alignment-from FILE  apply the alignment of an earlier evaluation (its evaluation.json\n"
+    "                       or --json output) instead of estimating one: a second run in the\n"
+    "                       same map scored in the first run's frame\n";
 
 std::vector<double> parseList(const std::string& text) {
   std::vector<double> values;
@@ -54,7 +57,8 @@ std::vector<sds::io::StampedPose> load(const std::string& path, const std::strin
 }
 
 int run(const sds::io::CommandLine& cl) {
-  cl.rejectUnknownFlags({"align", "json", "plot", "out", "max-dt", "rpe-distances", "segments"});
+  cl.rejectUnknownFlags(
+      {"align", "json", "plot", "out", "max-dt", "rpe-distances", "segments", "alignment-from"});
   if (cl.positional().size() > 2) {
     throw std::invalid_argument("unexpected argument '" + cl.positional()[2] + "'");
   }
@@ -66,12 +70,22 @@ int run(const sds::io::CommandLine& cl) {
   if (const auto list = cl.value("rpe-distances")) params.rpe_distances = parseList(*list);
   params.scale_segments = static_cast<int>(cl.integer("segments", params.scale_segments));
   params.validate();
+  if (const auto from = cl.value("alignment-from")) {
+    std::ifstream file(*from);
+    if (!file) throw std::runtime_error("cannot read '" + *from + "'");
+    try {
+      params.given_alignment = sds::evaluation::alignmentFromJson(nlohmann::json::parse(file));
+    } catch (const std::exception& e) {
+      throw std::runtime_error("'" + *from + "': " + e.what());
+    }
+  }
 
   const auto evaluation = sds::evaluation::evaluateTrajectory(
       load(truth_path, "ground truth"), load(estimate_path, "estimate"), params);
   nlohmann::json json = sds::evaluation::toJson(evaluation);
   json["ground_truth_file"] = truth_path;
   json["estimate_file"] = estimate_path;
+  if (const auto from = cl.value("alignment-from")) json["alignment_from"] = *from;
   if (const auto out = cl.value("out")) {
     std::error_code error;
     std::filesystem::create_directories(*out, error);
@@ -84,6 +98,9 @@ int run(const sds::io::CommandLine& cl) {
   if (cl.has("json")) {
     std::cout << json.dump(2) << "\n";
   } else {
+    if (const auto from = cl.value("alignment-from")) {
+      std::cout << "alignment given     from " << *from << " (not estimated)\n";
+    }
     std::cout << sds::evaluation::summaryText(evaluation);
   }
   return 0;

@@ -26,6 +26,9 @@ const char* kUsage =
     "/ground_truth/pose, /tf world -> camera_ground_truth), all stamped alike.\n"
     "Options:\n"
     "  --seed N                 textures and wobble (default 1); same seed, same images\n"
+    "  --scene-seed N           the scene's textures from N, the wobble and noise from --seed\n"
+    "                           (another pass through the same place; default: --seed)\n"
+    "  --start-fraction F       start F (in [0, 1)) along the trajectory (default 0)\n"
     "  --frames N               render only the first N frames (default: the whole trajectory)\n"
     "  --fps HZ                 frame rate (default: the scene's, 30; city_*: 10)\n"
     "  --width W --height H     image size (default: the scene's, 640 x 480; city_*: 1241 x 376)\n"
@@ -59,6 +62,14 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   const long seed = cl.integer("seed", 1);
   if (seed < 0 || seed > 0xffffffffL) throw std::invalid_argument("--seed must be in [0, 2^32)");
   p.seed = static_cast<std::uint32_t>(seed);
+  if (cl.has("scene-seed")) {
+    const long scene_seed = cl.integer("scene-seed", 1);
+    if (scene_seed < 0 || scene_seed > 0xffffffffL) {
+      throw std::invalid_argument("--scene-seed must be in [0, 2^32)");
+    }
+    p.scene_seed = static_cast<std::uint32_t>(scene_seed);
+  }
+  p.start_fraction = cl.number("start-fraction", 0.0);
   const long frames = cl.integer("frames", 0);
   if (frames < 0 || frames > 10000000) throw std::invalid_argument("--frames must be >= 0");
   p.max_frames = static_cast<int>(frames);
@@ -108,6 +119,8 @@ int run(const sds::io::CommandLine& cl) {
                          "out",
                          "bag",
                          "seed",
+                         "scene-seed",
+                         "start-fraction",
                          "frames",
                          "fps",
                          "width",

@@ -25,6 +25,7 @@
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/command_line.h"
 #include "scale_drift_slam/io/image_sequence.h"
+#include "scale_drift_slam/io/map_file.h"
 #include "scale_drift_slam/io/run_statistics.h"
 #include "scale_drift_slam/io/slam_params_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
@@ -53,6 +54,10 @@ calib.txt) or a rosbag (*.bag).
   --max-frames N       stop after N frames (default: all)
   --se3                correct loops with the SE(3) pose graph (the paper's baseline)
   --no-loop-closure    no loop closure (relocalisation still works)
+  --save-map FILE      save the map at the end (doc/map_file.md)
+  --load-map FILE      start in a saved map: relocalise in it by place recognition, write the
+                       trajectory in its frame, and extend it (new keyframes, loops)
+  --localization       with --load-map: localise only, add no keyframe, leave the map as it is
   --quiet              no progress bar, no parameter dump
 )";
 
@@ -201,16 +206,25 @@ struct RunOptions {
   long max_frames = -1;  // -1: all
   bool quiet = false;
   system::SlamParams params;
+  std::string save_map, load_map;
+  bool localization = false;
 };
 
 RunOptions parseOptions(const io::CommandLine& args) {
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
-                           "quiet", "se3", "no-loop-closure"});
+                           "quiet", "se3", "no-loop-closure", "save-map", "load-map",
+                           "localization"});
   RunOptions options;
   options.dataset = args.positional(0, "DATASET");
   options.out = args.required("out");
   options.max_frames = args.integer("max-frames", -1);
   options.quiet = args.has("quiet");
+  options.save_map = args.text("save-map", "");
+  options.load_map = args.text("load-map", "");
+  options.localization = args.has("localization");
+  if (options.localization && options.load_map.empty()) {
+    throw std::invalid_argument("--localization needs --load-map FILE");
+  }
   system::SlamParams& params = options.params;
   if (args.has("config")) params = io::loadSlamParams(args.required("config"));
   if (args.has("se3")) params.mapper.loop_correction.graph.mode = loop::PoseGraphMode::kSE3;
@@ -306,20 +320,23 @@ void writeTrajectories(const RunOptions& options, const system::SlamSystem& slam
 void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
                       const RunTally& tally, double startup_ms, double peak_mib) {
   const std::string& dataset = options.dataset;
-  const nlohmann::json summary = {{"dataset", dataset},
-                                  {"frames", tally.frames},
-                                  {"rejected_frames", tally.rejected},
-                                  {"tracked", tally.trajectory.size()},
-                                  {"states", tally.states},
-                                  {"keyframes", slam.map().numKeyframes()},
-                                  {"points", slam.map().numPoints()},
-                                  {"observations", slam.map().numObservations()},
-                                  {"loops", loopsJson(slam)},
-                                  {"relocalisations", slam.relocalisations()},
-                                  {"map_restarts", slam.mapRestarts()},
-                                  {"timing", tally.timings.toJson()},
-                                  {"startup_ms", startup_ms},
-                                  {"peak_memory_mib", peak_mib}};
+  const nlohmann::json summary = {
+      {"dataset", dataset},
+      {"frames", tally.frames},
+      {"rejected_frames", tally.rejected},
+      {"tracked", tally.trajectory.size()},
+      {"states", tally.states},
+      {"keyframes", slam.map().numKeyframes()},
+      {"points", slam.map().numPoints()},
+      {"observations", slam.map().numObservations()},
+      {"loops", loopsJson(slam)},
+      {"relocalisations", slam.relocalisations()},
+      {"map_restarts", slam.mapRestarts()},
+      {"loaded_map_keyframes", slam.restoredKeyframes()},
+      {"keyframes_added", slam.map().numKeyframes() - slam.restoredKeyframes()},
+      {"timing", tally.timings.toJson()},
+      {"startup_ms", startup_ms},
+      {"peak_memory_mib", peak_mib}};
   std::ofstream(options.out / "summary.json") << summary.dump(2) << "\n";
 }
 
@@ -338,6 +355,35 @@ void printSummary(const RunOptions& options, const system::SlamSystem& slam, con
             << " MiB\noutputs in " << options.out.string() << "\n";
 }
 
+/// --load-map: the saved map, checked against this run's camera, becomes the SLAM's.
+void loadMap(const RunOptions& options, const geometry::CameraCalibration& calibration,
+             system::SlamSystem& slam) {
+  io::MapFile file = io::loadMapFile(options.load_map);
+  io::checkMapCamera(file, calibration, options.load_map);
+  const map::Map& map = file.snapshot.map;
+  std::cout << "map: " << map.numKeyframes() << " keyframes, " << map.numPoints() << " points, "
+            << file.snapshot.loop_edges.size() << " loop edges from " << options.load_map
+            << (options.localization ? " (localisation only)" : "") << "\n";
+  if (file.params_yaml != io::formatSlamParams(options.params)) {
+    std::cout << "map: made with other SLAM parameters than this run's (kept in the file)\n";
+  }
+  slam.restore(std::move(file.snapshot), options.localization);
+}
+
+/// --save-map: the map as the run leaves it.
+void saveMap(const RunOptions& options, const geometry::CameraCalibration& calibration,
+             const system::SlamSystem& slam) {
+  io::MapFile file;
+  file.calibration = calibration;
+  file.params_yaml = io::formatSlamParams(options.params);
+  file.map_version = slam.map().version();
+  file.snapshot = slam.snapshot();
+  io::saveMapFile(options.save_map, file);
+  std::cout << "map saved to " << options.save_map << ": " << slam.map().numKeyframes()
+            << " keyframes, " << slam.map().numPoints() << " points, "
+            << fs::file_size(options.save_map) << " bytes\n";
+}
+
 int run(const io::CommandLine& args) {
   const common::Stopwatch timer;
   const RunOptions options = parseOptions(args);
@@ -349,6 +395,7 @@ int run(const io::CommandLine& args) {
   std::cout << "dataset: " << options.dataset << " (" << sequence->describe() << ")\n"
             << "camera: " << calibration.describe() << "\n";
   system::SlamSystem slam(geometry::makeCameraModel(calibration), options.params);
+  if (!options.load_map.empty()) loadMap(options, calibration, slam);
   const double startup_ms = timer.ms();
 
   const RunTally tally = trackSequence(options, *sequence, slam);
@@ -356,11 +403,18 @@ int run(const io::CommandLine& args) {
   const double peak_mib = io::peakMemoryMiB();
   writeSummaryJson(options, slam, tally, startup_ms, peak_mib);
   printSummary(options, slam, tally, startup_ms, peak_mib);
+  if (!options.save_map.empty()) {
+    if (slam.map().numKeyframes() == 0) {
+      std::cerr << "run_sequence: no map to save to " << options.save_map << "\n";
+      return 1;
+    }
+    saveMap(options, calibration, slam);
+  }
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return io::runTool(argc, argv, kUsage, {"quiet", "se3", "no-loop-closure"}, run);
+  return io::runTool(argc, argv, kUsage, {"quiet", "se3", "no-loop-closure", "localization"}, run);
 }

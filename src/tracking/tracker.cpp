@@ -126,6 +126,8 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   try {
     if (state_ == TrackingState::kInitializing) {
       initialise(timestamp, pyramid, &result);
+    } else if (awaiting_first_relocalisation_) {
+      result.message = "lost: waiting for relocalisation in the loaded map";
     } else {
       track(timestamp, pyramid, &result);
     }
@@ -173,7 +175,7 @@ void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
 void Tracker::restartYoungLostMap(FrameResult* result) {
   lost_in_row_ = state_ == TrackingState::kLost ? lost_in_row_ + 1 : 0;
   const std::size_t keyframes = map_.numKeyframes();
-  if (lost_in_row_ < params_.restart_after_lost_frames ||
+  if (restored_map_ || lost_in_row_ < params_.restart_after_lost_frames ||
       keyframes >= static_cast<std::size_t>(params_.restart_below_keyframes)) {
     return;
   }
@@ -238,10 +240,50 @@ bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
   // The feature candidates followed the flow through the lost frames (track()), so their pixels
   // are in this last frame too and they are kept.
   previous_image_ = pending.frames.back();
+  awaiting_first_relocalisation_ = false;
   T_previous_world_ = T_before_previous_world_ = carried->T_cam_world;
   last_scene_depth_ = sceneDepth(carried->T_cam_world);
   resume_from_relocalisation_ = true;
   return true;
+}
+
+void Tracker::restoreMap(
+    const map::Map& map,
+    const std::unordered_map<map::PointId, features::PointAppearance>& appearances,
+    const std::vector<std::pair<map::KeyframeId, map::KeyframeId>>& loop_links) {
+  if (state_ != TrackingState::kInitializing || frame_index_ != 0 || map_.numKeyframes() != 0) {
+    throw std::logic_error("tracker: a map can only be restored before the first frame");
+  }
+  if (map.numKeyframes() == 0) throw std::invalid_argument("tracker: the map has no keyframe");
+  TrackingMap restored;
+  for (const auto& [id, point] : map.points()) {
+    const auto appearance = appearances.find(id);
+    if (appearance == appearances.end() || appearance->second.empty()) continue;
+    TrackedPoint tracked;
+    tracked.id = id;
+    tracked.p_world = point.p_world;
+    tracked.reference_keyframe = point.reference_keyframe;
+    tracked.appearance = appearance->second;
+    restored.addPoint(std::move(tracked));
+    next_point_id_ = std::max(next_point_id_, id + 1);
+  }
+  for (const auto& [id, keyframe] : map.keyframes()) {
+    TrackedKeyframe tracked{id, keyframe.timestamp, keyframe.T_kf_world, {}};
+    for (const map::Observation& o : keyframe.observations) {
+      if (restored.hasPoint(o.point_id)) tracked.points.push_back(o.point_id);
+    }
+    restored.addKeyframe(std::move(tracked));
+    next_keyframe_id_ = std::max(next_keyframe_id_, id + 1);
+  }
+  for (const auto& [id, point] : map.points())
+    next_point_id_ = std::max(next_point_id_, id + 1);
+  for (const auto& [a, b] : loop_links) {
+    if (restored.hasKeyframe(a) && restored.hasKeyframe(b)) restored.linkKeyframes(a, b);
+  }
+  map_ = std::move(restored);
+  state_ = TrackingState::kLost;
+  awaiting_first_relocalisation_ = true;
+  restored_map_ = true;
 }
 
 void Tracker::applyMapUpdate(const map::MapUpdate& update) {

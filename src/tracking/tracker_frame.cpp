@@ -70,7 +70,8 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
   candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
   result->times.filters = stage.lapMs();
-  // 6. The keyframe rule (tracking is good or weak here, not lost).
+  // 6. The keyframe rule (tracking is good or weak here, not lost); none when only localising.
+  if (localization_only_) return;
   const ViewDirections view{T_cam_world.rotation().conjugate() * Eigen::Vector3d::UnitZ(),
                             map_.keyframeViewAxes(), field_of_view_};
   const KeyframeDecision decision = decideKeyframe(

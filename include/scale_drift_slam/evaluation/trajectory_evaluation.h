@@ -4,6 +4,7 @@
 // distances travelled, scale drift per segment, and the fraction of frames tracked. Used by the
 // evaluate_trajectory tool; the report (JSON, text, plot) is in evaluation/evaluation_report.h.
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,7 +27,10 @@ struct EvaluationParams {
   double max_time_difference = 0.02;  ///< Seconds between associated stamps.
   std::vector<double> rpe_distances = {1.0, 2.0, 5.0, 10.0};  ///< Metres along the true path.
   int scale_segments = 10;  ///< Equal lengths of the true path for the scale drift.
-  void validate() const;    ///< Throws std::invalid_argument with the reason.
+  /// Use this alignment (S_truth_estimate) instead of estimating one, e.g. the one estimated on
+  /// an earlier run in the same map (`alignment` then only names it in the report).
+  std::optional<geometry::Sim3> given_alignment;
+  void validate() const;  ///< Throws std::invalid_argument with the reason.
 };
 
 /// Pairs (truth index, estimate index) whose stamps differ by at most max_time_difference, each

@@ -74,7 +74,21 @@ class LoopCloser {
   /// against the best places.
   map::RelocalisationAnswer relocalise(const map::RelocalisationRequest& request);
 
+  /// Goes on from a saved state (call on a new LoopCloser only, before any keyframe): the map,
+  /// the place-recognition database rebuilt from `places` (with `vocabulary`, or learning one as
+  /// the keyframes come when it is null), the keyframes' JPEG images. Throws
+  /// std::invalid_argument on a place or image of a keyframe the map does not hold, or an
+  /// invalid appearance.
+  void restore(map::Map map, std::shared_ptr<const Vocabulary> vocabulary,
+               std::vector<SavedPlace> places,
+               std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>> jpeg_images);
+
   const map::Map& map() const { return map_; }
+  const PlaceRecognizer& recognizer() const { return recognizer_; }
+  /// The stored keyframe images, JPEG-compressed.
+  const std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>>& keyframeImages() const {
+    return jpeg_images_;
+  }
   /// The version of the last MapUpdate applied (0: none).
   std::uint64_t mapVersion() const { return map_version_; }
   std::size_t numKeyframes() const { return map_.numKeyframes(); }

@@ -59,6 +59,18 @@ struct PlaceQueryResult {
   std::string describe() const;
 };
 
+/// One keyframe of the database as a map file keeps it (system/map_snapshot.h).
+struct SavedPlace {
+  map::KeyframeId id = 0;
+  double timestamp = 0.0;
+  KeyframeAppearance appearance;
+  /// Its bag of words and feature groups under the database's vocabulary, when it was indexed:
+  /// restoring then skips the vocabulary descent of every descriptor.
+  bool indexed = false;
+  BowVector bow;
+  FeatureGroups groups;
+};
+
 /// Finds earlier keyframes that show the place a new keyframe shows. Feed keyframes in order:
 /// query(k) then add(k) (or queryAndAdd). Runs in the loop-closure thread; not thread-safe. Owns
 /// the appearances of all keyframes added (about 41 kB each with 1000 keypoints) and shares the
@@ -80,6 +92,10 @@ class PlaceRecognizer {
   /// Adds a keyframe to the database. Throws std::invalid_argument on a repeated id or an
   /// invalid appearance.
   void add(map::KeyframeId id, double timestamp, KeyframeAppearance appearance);
+  /// Adds a saved keyframe: with its bag of words and groups as saved when `place.indexed` and
+  /// the vocabulary is ready (they must come from this vocabulary), else as add(). Throws
+  /// std::invalid_argument as add() does, or on words or feature indices out of range.
+  void addSaved(SavedPlace place);
   /// query() then add().
   PlaceQueryResult queryAndAdd(map::KeyframeId id, double timestamp, KeyframeAppearance appearance,
                                const std::unordered_set<map::KeyframeId>& excluded = {});
@@ -104,6 +120,17 @@ class PlaceRecognizer {
   /// std::out_of_range for an unknown id.
   const KeyframeAppearance& appearance(map::KeyframeId id) const;
   const PlaceRecognitionParams& params() const { return params_; }
+
+  /// A keyframe of the database as added (what a map file keeps to rebuild it with add()).
+  struct Place {
+    map::KeyframeId id = 0;
+    double timestamp = 0.0;
+    const KeyframeAppearance* appearance = nullptr;  ///< Owned by the recognizer.
+    const BowVector* bow = nullptr;                  ///< Null before the keyframe was indexed.
+    const FeatureGroups* groups = nullptr;
+  };
+  /// The keyframes added so far, in the order they were added.
+  std::vector<Place> places() const;
 
  private:
   struct Stored {

@@ -53,6 +53,10 @@ class Vocabulary {
   static Vocabulary load(const std::string& path);
   /// Writes a compact binary file (about 46 bytes per node). Throws std::runtime_error.
   void save(const std::string& path) const;
+  /// The file's bytes (what save() writes), e.g. to embed the vocabulary in a map file.
+  std::string toBytes() const;
+  /// Parses toBytes() output; `origin` names the source in errors. Throws as load() does.
+  static Vocabulary fromBytes(const std::string& data, const std::string& origin);
 
   bool empty() const { return idf_.empty(); }
   std::size_t numWords() const { return idf_.size(); }

@@ -81,6 +81,9 @@ struct LoopCorrectionStatistics {
 class Mapper {
  public:
   Mapper(const MapperParams& params, double focal_length_px);
+  /// Goes on with a saved map and the loop edges applied to it (system/map_snapshot.h).
+  Mapper(const MapperParams& params, double focal_length_px, map::Map map,
+         std::vector<loop::PoseGraphEdge> loop_edges);
 
   /// Adds the keyframe (brought into the current world frame when it was made before a loop
   /// correction; observations of points the map does not know are skipped), runs the window BA

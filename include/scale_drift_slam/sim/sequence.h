@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,12 @@ struct SequenceParams {
   int max_frames = 0;          ///< Render only the first frames (0: the whole trajectory).
   bool color = false;          ///< bgr8 images instead of mono8.
   double start_time = 1000.0;  ///< Stamp of the first frame, seconds.
+  /// The scene (textures, layout) from this seed, the motion (wobble) and the noise from `seed`:
+  /// another pass through the same place. Unset: both from `seed`.
+  std::optional<std::uint32_t> scene_seed;
+  /// The first frame is this far along the trajectory (a share of its duration, in [0, 1)); the
+  /// sequence is that much shorter.
+  double start_fraction = 0.0;
   RealismParams realism;
   void validate() const;  ///< Throws std::invalid_argument with the reason.
 };

@@ -13,6 +13,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "scale_drift_slam/geometry/camera_model.h"
 #include "scale_drift_slam/loop/loop_closer.h"
@@ -48,6 +50,13 @@ class LoopCloserEndpoint {
   /// Answers a request; one of another session fails with the reason.
   Addressed<map::RelocalisationAnswer> relocalise(const Envelope& from,
                                                   const map::RelocalisationRequest& request);
+
+  /// Takes a saved map as the loop closer of tracker session `session` (loop::LoopCloser::
+  /// restore). Throws what the LoopCloser throws; nothing changes then.
+  void restore(std::uint32_t session, std::shared_ptr<const geometry::CameraModel> camera,
+               map::Map map, std::shared_ptr<const loop::Vocabulary> vocabulary,
+               std::vector<loop::SavedPlace> places,
+               std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>> jpeg_images);
 
   /// The loop closer of the current session; nullptr before the first keyframe.
   const loop::LoopCloser* closer() const { return closer_ ? &*closer_ : nullptr; }

@@ -43,6 +43,10 @@ class MapperEndpoint {
   };
   LoopOutcome closeLoop(const Envelope& from, const loop::LoopConstraint& constraint);
 
+  /// Takes a saved map as the map of tracker session `session` (its keyframes go on in it).
+  void restore(std::uint32_t session, double focal_length_px, map::Map map,
+               std::vector<loop::PoseGraphEdge> loop_edges);
+
   /// Forgets the map; the next keyframe starts a new one. `new_mapper_id` must differ from the
   /// ids used before (receivers retire the old one).
   void reset(std::uint32_t new_mapper_id);

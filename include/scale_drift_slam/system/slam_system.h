@@ -29,6 +29,7 @@
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/system/envelope.h"
 #include "scale_drift_slam/system/loop_closer_endpoint.h"
+#include "scale_drift_slam/system/map_snapshot.h"
 #include "scale_drift_slam/system/mapper_endpoint.h"
 #include "scale_drift_slam/system/slam_params.h"
 #include "scale_drift_slam/system/tracker_inbox.h"
@@ -58,6 +59,18 @@ class SlamSystem {
   /// Lets the mapper and the loop closer finish their queues, stops the threads and applies the
   /// last updates to the trajectory. Idempotent.
   void finish();
+
+  /// Everything a later run needs to go on in this map (map_snapshot.h); only after finish().
+  /// Throws std::logic_error before finish() and when there is no map.
+  MapSnapshot snapshot() const;
+  /// Starts from a saved map (call before the first frame; throws std::logic_error after): the
+  /// tracker is lost in it and relocalises by place recognition; its trajectory is in the saved
+  /// map's frame. `localization_only`: no keyframe is added, the map does not change; otherwise
+  /// this session's keyframes extend the map from its first relocalisation on. Throws
+  /// std::invalid_argument on an inconsistent snapshot; nothing changes then.
+  void restore(MapSnapshot snapshot, bool localization_only);
+  /// Keyframes in the map restored at the start (0: none restored).
+  std::size_t restoredKeyframes() const { return restored_keyframes_; }
 
   /// The mapper's map; only after finish() (or without threads).
   const map::Map& map() const { return mapper_.map(); }
@@ -104,6 +117,8 @@ class SlamSystem {
   std::vector<std::string> log_;
   int relocalisations_ = 0;
   int map_restarts_ = 0;
+  std::size_t restored_keyframes_ = 0;
+  bool started_ = false;  ///< A frame was processed.
   std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };

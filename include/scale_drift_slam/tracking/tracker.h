@@ -10,6 +10,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -109,6 +111,19 @@ class Tracker {
   /// pose and the map points found in it. Stale, failed or unneeded answers are ignored.
   bool applyRelocalisation(const map::RelocalisationAnswer& answer);
 
+  /// Starts from a saved map (call before the first frame): its keyframes and the points that
+  /// have an appearance, the co-visibility from the observations, the loop links. The tracker is
+  /// then lost in it: it asks for relocalisation with every frame until an answer comes (it does
+  /// not track from a guessed pose), never initialises a new map and never discards this one.
+  /// New keyframe and point ids continue above the map's.
+  void restoreMap(const map::Map& map,
+                  const std::unordered_map<map::PointId, features::PointAppearance>& appearances,
+                  const std::vector<std::pair<map::KeyframeId, map::KeyframeId>>& loop_links);
+  /// Localisation only: no keyframe is made (the map is not changed); tracking, relocalisation
+  /// and map updates work as before.
+  void setLocalizationOnly(bool on) { localization_only_ = on; }
+  bool localizationOnly() const { return localization_only_; }
+
   TrackingState state() const { return state_; }
   const TrackingMap& trackingMap() const { return map_; }
   std::size_t numCandidates() const { return candidates_.size(); }
@@ -188,6 +203,10 @@ class Tracker {
   };
   std::optional<PendingRelocalisation> relocalisation_;  ///< The request outstanding.
   bool resume_from_relocalisation_ = false;
+  bool localization_only_ = false;
+  /// A restored map: not yet relocalised in (no pose to track from), never discarded.
+  bool awaiting_first_relocalisation_ = false;
+  bool restored_map_ = false;
 };
 
 }  // namespace scale_drift_slam::tracking
