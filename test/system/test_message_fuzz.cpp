@@ -373,6 +373,7 @@ TEST_F(MessageFuzz, MutatedMapUpdates) {
 TEST_F(MessageFuzz, MutatedLoopConstraints) {
   const auto start = std::chrono::steady_clock::now();
   Figures figures;
+  int applied = 0;
   for (int i = 0; i < iterations(); ++i) {
     loop::LoopConstraint c;
     c.current_id = 4;
@@ -401,10 +402,15 @@ TEST_F(MessageFuzz, MutatedLoopConstraints) {
     ++figures.cases;
     const std::string problem = loopConstraintProblem(c, MessageLimits{});
     if (problem.empty()) {
-      // Valid content: the graph may run (the mapper then checks the keyframes exist).
+      // Valid content: the graph runs when both keyframes are in the map; the map stays finite.
       ASSERT_TRUE(finite(c.S_current_loop) && finite(c.T_current_loop) && std::isfinite(c.scale) &&
                   std::isfinite(c.rmse_px))
           << "case " << i;
+      if (mapper->loopEdges().size() >= 20) restart();  // a small graph: thousands of cases
+      const auto outcome = mapper->closeLoop({1, 7, 3}, c);
+      ASSERT_TRUE(outcome.refusal.empty()) << outcome.refusal;
+      ASSERT_TRUE(digest(mapper->map()).finite) << "case " << i;
+      applied += outcome.statistics.applied;
       continue;
     }
     ++figures.refused;
@@ -414,8 +420,9 @@ TEST_F(MessageFuzz, MutatedLoopConstraints) {
     ASSERT_FALSE(outcome.update.has_value());
     ASSERT_EQ(digest(mapper->map()), before) << "case " << i;
   }
-  EXPECT_TRUE(mapper->loopEdges().empty());
   report("loop constraints", figures, start);
+  std::printf("fuzz: loop constraints: %d applied by the mapper\n", applied);
+  EXPECT_GT(applied, 0);
   EXPECT_GT(figures.refused, figures.cases / 2);
 }
 
