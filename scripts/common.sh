@@ -59,6 +59,20 @@ sds_build() {
   fi
   sds_log "building ${targets[*]} (-j$SDS_JOBS)"
   cmake --build "$SDS_BUILD_DIR" -j "$SDS_JOBS" --target "${targets[@]}"
+  sds_link_devel
+}
+
+# rosrun skips everything under <package>/build/ (its `find ... ! -regex ".*$pkgdir/build/.*"`),
+# the devel space of the default build folder included: "Couldn't find executable". A link
+# <package>/devel -> build/devel is searched instead, so that `rosrun scale_drift_slam NODE` works
+# after `source build/devel/setup.bash` (doc/ros.md). Made only for the default build folder, and
+# never over a real devel folder.
+sds_link_devel() {
+  [[ "$SDS_BUILD_DIR" == "$SDS_ROOT/build" && -d "$SDS_BUILD_DIR/devel" ]] || return 0
+  local link="$SDS_ROOT/devel"
+  if [[ -L "$link" || ! -e "$link" ]]; then
+    ln -sfn build/devel "$link"
+  fi
 }
 
 # ROS settings for anything that starts nodes: loopback only, logs inside the build folder.

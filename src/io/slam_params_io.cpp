@@ -153,6 +153,15 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"loop_correction", "structure_iterations", &c.structure.max_iterations},
       {"loop_correction", "structure_huber_width_px", &c.structure.huber_width_px},
       {"system", "mapping_thread", &p.mapping_thread},
+      {"messages", "max_observations", &p.messages.max_observations},
+      {"messages", "max_new_points", &p.messages.max_new_points},
+      {"messages", "max_keyframe_id_gap", &p.messages.max_keyframe_id_gap},
+      {"messages", "max_update_entries", &p.messages.max_update_entries},
+      {"messages", "max_found_points", &p.messages.max_found_points},
+      {"messages", "max_image_side", &p.messages.max_image_side},
+      {"messages", "max_coordinate", &p.messages.max_coordinate},
+      {"messages", "max_normalised", &p.messages.max_normalised},
+      {"messages", "max_scale_ratio", &p.messages.max_scale_ratio},
   };
   Field flow_method{"flow", "method", static_cast<int*>(nullptr)};
   flow_method.parse_text = [&t](const std::string& s) {

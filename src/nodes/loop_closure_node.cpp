@@ -79,6 +79,7 @@ class LoopClosureNode {
     map::KeyframeMessage keyframe;
     try {
       keyframe = ros_conversions::fromKeyframeMsg(*msg, &image_problem);
+      ros_conversions::calibrationFromCameraInfo(msg->camera);  // its camera must be valid too
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5, "ignoring keyframe %u: %s", msg->id, e.what());
       return;
@@ -172,6 +173,10 @@ class LoopClosureNode {
     const bool loop_correction = in.update.message.isLoopCorrection();
     const system::LoopCloserEndpoint::UpdateOutcome outcome =
         endpoint_.applyMapUpdate(in.update.from, std::move(in.update.message));
+    if (!outcome.refusal.empty()) {
+      ROS_WARN_THROTTLE(5, "refused: %s (ignored)", outcome.refusal.c_str());
+      return;
+    }
     if (outcome.new_mapper) {
       ROS_WARN(
           "map updates from a new mapper (restarted or reset): keeping the loop closer's "
@@ -220,7 +225,7 @@ class LoopClosureNode {
   ros::Publisher constraint_pub_, answer_pub_;
   common::MessageQueue<Input> inbox_;
   /// The worker's: the loop closer and its session rule (system/loop_closer_endpoint.h).
-  system::LoopCloserEndpoint endpoint_{config_.slam.loop};
+  system::LoopCloserEndpoint endpoint_{config_.slam.loop, config_.slam.messages};
   std::thread worker_;  // last: starts after everything it uses
 };
 

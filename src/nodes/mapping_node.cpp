@@ -34,7 +34,7 @@ class MappingNode {
       : config_(std::move(config)),
         params_(config_.node),
         T_map_world_(ros_conversions::mapFromWorld(params_.map_z_up)),
-        endpoint_(config_.slam.mapper, newMapperId()) {
+        endpoint_(config_.slam.mapper, newMapperId(), config_.slam.messages) {
     keyframe_sub_ =
         nh.subscribe("keyframes", params_.keyframe_queue_size, &MappingNode::onKeyframe, this);
     constraint_sub_ = nh.subscribe("loop_constraints", 10, &MappingNode::onLoopConstraint, this);
@@ -53,6 +53,7 @@ class MappingNode {
     try {
       std::string image_problem;  // the mapper needs no image: a bad one is not its business
       keyframe = ros_conversions::fromKeyframeMsg(*msg, &image_problem);
+      ros_conversions::calibrationFromCameraInfo(msg->camera);  // its camera must be valid too
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(5, "keyframe %u refused: %s", msg->id, e.what());
       return;
@@ -122,7 +123,7 @@ class MappingNode {
     system::MapperEndpoint::LoopOutcome outcome =
         endpoint_.closeLoop(ros_conversions::envelopeOf(*msg), constraint);
     const mapping::LoopCorrectionStatistics& statistics = outcome.statistics;
-    if (outcome.stale) {
+    if (outcome.stale || !outcome.refusal.empty()) {
       ROS_WARN_THROTTLE(5, "%s refused: %s", loop.c_str(), statistics.reason.c_str());
       return;
     }

@@ -193,6 +193,8 @@ class TrackingNode {
     } else if (!report.relocalisation_failure.empty()) {
       ROS_INFO_THROTTLE(5, "no relocalisation yet: %s", report.relocalisation_failure.c_str());
     }
+    for (const std::string& refusal : report.refused)
+      ROS_WARN_THROTTLE(5, "refused: %s (ignored)", refusal.c_str());
   }
 
   void publish(const std_msgs::Header& header, const tracking::FrameResult& result,
@@ -268,7 +270,8 @@ class TrackingNode {
   std::shared_ptr<const geometry::CameraModel> camera_;
   sensor_msgs::CameraInfo camera_info_;
   std::unique_ptr<tracking::Tracker> tracker_;
-  system::TrackerInbox inbox_;  ///< Map updates and relocalisation answers; the session.
+  system::TrackerInbox inbox_{
+      config_.slam.messages};  ///< Map updates and relocalisation answers; the session.
   ros::Time last_stamp_;
   std::optional<tracking::TrackingState> last_state_;
   ros::AsyncSpinner update_spinner_{1, &update_queue_};  // map updates and answers

@@ -6,8 +6,23 @@
 
 namespace scale_drift_slam::system {
 
-LoopCloserEndpoint::LoopCloserEndpoint(loop::LoopCloserParams params) : params_(std::move(params)) {
+LoopCloserEndpoint::LoopCloserEndpoint(loop::LoopCloserParams params, MessageLimits limits)
+    : params_(std::move(params)), limits_(limits) {
   params_.validate();
+  limits_.validate();
+}
+
+std::string LoopCloserEndpoint::admissionProblem(const Envelope& from,
+                                                 const map::KeyframeMessage& keyframe) const {
+  std::string problem = keyframeProblem(keyframe, limits_);
+  if (problem.empty())
+    problem = internal::keyframeRefusal(from, keyframe.keyframe, closer_.has_value(), session_,
+                                        "loop closer's map");
+  if (problem.empty() && isCurrent(from.session) && closer_->map().numKeyframes() > 0) {
+    problem = keyframeIdProblem(keyframe.keyframe.id, closer_->map().keyframes().rbegin()->first,
+                                limits_);
+  }
+  return problem;
 }
 
 LoopCloserEndpoint::KeyframeOutcome LoopCloserEndpoint::addKeyframe(const Envelope& from,
@@ -15,8 +30,7 @@ LoopCloserEndpoint::KeyframeOutcome LoopCloserEndpoint::addKeyframe(const Envelo
                                                                     const CameraSource& camera) {
   KeyframeOutcome outcome;
   const map::KeyframeId id = keyframe.keyframe.id;
-  outcome.refusal = internal::keyframeRefusal(from, keyframe.keyframe, closer_.has_value(),
-                                              session_, "loop closer's map");
+  outcome.refusal = admissionProblem(from, keyframe);
   if (!outcome.refusal.empty()) return outcome;
   if (!isCurrent(from.session)) {
     // A new session: the camera is checked before the old loop closer goes.
@@ -54,6 +68,8 @@ LoopCloserEndpoint::UpdateOutcome LoopCloserEndpoint::applyMapUpdate(const Envel
                                                                      map::MapUpdate update) {
   UpdateOutcome outcome;
   if (!isCurrent(from.session)) return outcome;  // built from another session's keyframes
+  outcome.refusal = mapUpdateProblem(update, limits_);
+  if (!outcome.refusal.empty()) return outcome;
   const std::optional<std::uint64_t> version = versions_.toTracker(
       from.mapper_id, from.map_version, closer_->mapVersion(), &outcome.new_mapper);
   outcome.new_mapper = outcome.new_mapper && closer_->mapVersion() > 0;
@@ -77,10 +93,12 @@ void LoopCloserEndpoint::restore(
 
 Addressed<map::RelocalisationAnswer> LoopCloserEndpoint::relocalise(
     const Envelope& from, const map::RelocalisationRequest& request) {
-  if (!isCurrent(from.session)) {
+  const std::string problem = relocalisationRequestProblem(request, limits_);
+  if (!problem.empty() || !isCurrent(from.session)) {
     map::RelocalisationAnswer answer;
     answer.frame_index = request.frame_index;
-    answer.reason = "the loop closer holds no keyframe of this tracker session";
+    answer.reason =
+        problem.empty() ? "the loop closer holds no keyframe of this tracker session" : problem;
     return {Envelope{from.session, 0, 0}, answer};
   }
   map::RelocalisationAnswer answer = closer_->relocalise(request);

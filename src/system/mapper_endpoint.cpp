@@ -7,9 +7,24 @@
 
 namespace scale_drift_slam::system {
 
-MapperEndpoint::MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id)
-    : params_(std::move(params)), mapper_id_(mapper_id) {
+MapperEndpoint::MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id,
+                               MessageLimits limits)
+    : params_(std::move(params)), limits_(limits), mapper_id_(mapper_id) {
   params_.validate();
+  limits_.validate();
+}
+
+std::string MapperEndpoint::admissionProblem(const Envelope& from,
+                                             const map::KeyframeMessage& keyframe) const {
+  std::string problem = keyframeProblem(keyframe, limits_);
+  if (problem.empty())
+    problem =
+        internal::keyframeRefusal(from, keyframe.keyframe, mapper_.has_value(), session_, "map");
+  if (problem.empty() && isCurrent(from.session) && mapper_->map().numKeyframes() > 0) {
+    problem = keyframeIdProblem(keyframe.keyframe.id, mapper_->map().keyframes().rbegin()->first,
+                                limits_);
+  }
+  return problem;
 }
 
 MapperEndpoint::KeyframeOutcome MapperEndpoint::addKeyframe(
@@ -17,8 +32,7 @@ MapperEndpoint::KeyframeOutcome MapperEndpoint::addKeyframe(
     const std::function<double()>& focal_length_px) {
   KeyframeOutcome outcome;
   const map::KeyframeId id = keyframe.keyframe.id;
-  outcome.refusal =
-      internal::keyframeRefusal(from, keyframe.keyframe, mapper_.has_value(), session_, "map");
+  outcome.refusal = admissionProblem(from, keyframe);
   if (!outcome.refusal.empty()) return outcome;
   if (!isCurrent(from.session)) {
     // A new map: everything that can refuse the keyframe is checked before the old one goes.
@@ -52,6 +66,11 @@ MapperEndpoint::LoopOutcome MapperEndpoint::closeLoop(const Envelope& from,
                                                       const loop::LoopConstraint& constraint) {
   LoopOutcome outcome;
   outcome.statistics.constraint = constraint;
+  outcome.refusal = loopConstraintProblem(constraint, limits_);
+  if (!outcome.refusal.empty()) {
+    outcome.statistics.reason = outcome.refusal;
+    return outcome;
+  }
   if (!isCurrent(from.session)) {
     outcome.stale = true;
     outcome.statistics.reason =

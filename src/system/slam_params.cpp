@@ -6,6 +6,7 @@ void SlamParams::validate() const {
   tracker.validate();
   mapper.validate();
   loop.validate();
+  messages.validate();
 }
 
 }  // namespace scale_drift_slam::system

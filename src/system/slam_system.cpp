@@ -20,8 +20,8 @@ SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camer
     : params_(params),
       camera_(camera),
       tracker_(camera, params.tracker),
-      mapper_(params.mapper, /*mapper_id=*/1),
-      loop_closer_(params.loop) {
+      mapper_(params.mapper, /*mapper_id=*/1, params.messages),
+      loop_closer_(params.loop, params.messages) {
   focalOf(camera_);  // throws without a camera
   tracker_inbox_.startSession(session_);
   if (params_.mapping_thread) {
@@ -52,13 +52,13 @@ void SlamSystem::finish() {
   } else {
     runInline();
   }
-  tracker_inbox_.drain(tracker_, trajectory_);
+  drainInbox();
 }
 
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
                                                features::PixelEncoding encoding) {
   started_ = true;
-  tracker_inbox_.drain(tracker_, trajectory_);
+  drainInbox();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
   if (result.map_restarted) {
     // A new session: its first keyframe starts a new map at the mapper and the loop closer.
@@ -82,9 +82,14 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
   }
   if (!params_.mapping_thread) {
     runInline();
-    tracker_inbox_.drain(tracker_, trajectory_);
+    drainInbox();
   }
   return result;
+}
+
+void SlamSystem::drainInbox() {
+  for (const std::string& refusal : tracker_inbox_.drain(tracker_, trajectory_).refused)
+    log("refused by the tracker: " + refusal);
 }
 
 void SlamSystem::runInline() {
@@ -140,6 +145,10 @@ void SlamSystem::handle(MapperInput input) {
   const auto& [from, constraint] = std::get<Addressed<loop::LoopConstraint>>(input);
   MapperEndpoint::LoopOutcome outcome = mapper_.closeLoop(from, constraint);
   if (outcome.stale) return;  // found in a discarded map
+  if (!outcome.refusal.empty()) {
+    log("loop constraint refused by the mapper: " + outcome.refusal);
+    return;
+  }
   log(outcome.statistics.describe());
   {
     std::lock_guard<std::mutex> lock(record_mutex_);
@@ -168,7 +177,9 @@ void SlamSystem::handle(LoopInput input) {
     }
     if (outcome.constraint) mapper_inbox_.push(std::move(*outcome.constraint));
   } else if (auto* update = std::get_if<Addressed<map::MapUpdate>>(&input)) {
-    loop_closer_.applyMapUpdate(update->from, std::move(update->message));
+    const LoopCloserEndpoint::UpdateOutcome outcome =
+        loop_closer_.applyMapUpdate(update->from, std::move(update->message));
+    if (!outcome.refusal.empty()) log("map update refused by the loop closer: " + outcome.refusal);
   } else {
     const auto& request = std::get<Addressed<map::RelocalisationRequest>>(input);
     Addressed<map::RelocalisationAnswer> answer =

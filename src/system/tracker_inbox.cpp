@@ -1,17 +1,46 @@
 #include "scale_drift_slam/system/tracker_inbox.h"
 
 namespace scale_drift_slam::system {
+namespace {
+
+std::optional<map::KeyframeId> newestKeyframe(const tracking::Tracker& tracker) {
+  const auto& keyframes = tracker.trackingMap().keyframes();
+  if (keyframes.empty()) return std::nullopt;
+  return keyframes.rbegin()->first;
+}
+
+}  // namespace
+
+std::string TrackerInbox::problem(const Addressed<map::MapUpdate>& update,
+                                  const tracking::Tracker& tracker) const {
+  std::string problem = mapUpdateProblem(update.message, limits_);
+  if (problem.empty()) problem = trackerIdsProblem(update.message, newestKeyframe(tracker));
+  return problem;
+}
+
+std::string TrackerInbox::problem(const Addressed<map::RelocalisationAnswer>& answer,
+                                  const tracking::Tracker& tracker) const {
+  std::string problem = relocalisationAnswerProblem(answer.message, limits_);
+  if (problem.empty()) problem = trackerIdsProblem(answer.message, newestKeyframe(tracker));
+  return problem;
+}
 
 TrackerInbox::Report TrackerInbox::drain(tracking::Tracker& tracker,
                                          map::CorrectedTrajectory& trajectory) {
   Report report;
   while (auto received = queue_.tryPop()) {
+    std::string refusal;
     if (auto* update = std::get_if<Addressed<map::MapUpdate>>(&*received)) {
-      if (update->from.session == session_) apply(*update, tracker, trajectory, &report);
+      if (update->from.session != session_) continue;
+      refusal = problem(*update, tracker);
+      if (refusal.empty()) apply(*update, tracker, trajectory, &report);
     } else {
       auto& answer = std::get<Addressed<map::RelocalisationAnswer>>(*received);
-      if (answer.from.session == session_) apply(answer, tracker, &report);
+      if (answer.from.session != session_) continue;
+      refusal = problem(answer, tracker);
+      if (refusal.empty()) apply(answer, tracker, &report);
     }
+    if (!refusal.empty()) report.refused.push_back(std::move(refusal));
   }
   return report;
 }

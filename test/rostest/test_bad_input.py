@@ -5,9 +5,12 @@ then the map restart), invalid parameters at start-up (the node exits at once na
 parameter); between the nodes: keyframes without an image or with a colour one (the loop closure
 node stores them without a loop search), loop constraints with a non-positive scale, naming
 unknown keyframes or of another session (the mapping node refuses them), a relocalisation request
-without an image (answered with the reason). Also: every common encoding and compressed images
-are tracked."""
+without an image (answered with the reason); same-session keyframes with a zero or NaN camera
+matrix, a pose at 1e9, 50 000 observations or an id far ahead of the tracker (refused, not in the
+mapping node's keyframes, the real keyframe with that id taken afterwards). Also: every common
+encoding and compressed images are tracked."""
 
+import copy
 import os
 import subprocess
 import sys
@@ -17,9 +20,10 @@ import unittest
 import rospy
 import rostest
 from rosgraph_msgs.msg import Log
-from scale_drift_slam.msg import (Keyframe, MapUpdate, RelocalisationAnswer, RelocalisationRequest,
+from scale_drift_slam.msg import (Keyframe, MapUpdate, Observation, RelocalisationAnswer, RelocalisationRequest,
                                   Sim3Constraint, TrackingStatus)
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+from scale_drift_slam.srv import SaveTrajectory
 from std_srvs.srv import Trigger
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -246,6 +250,56 @@ class BadInput(unittest.TestCase):
             if name.endswith(('mapping_node', 'loop_closure_node')) and 'session' not in text:
                 print('  %s [%s] %s' % (name, {Log.WARN: 'WARN', Log.ERROR: 'ERROR'}.get(level),
                                         text))
+
+    def test_5_invalid_same_session_keyframes(self):
+        """After test_4 the mapping node holds keyframes 0 and 1 of session 4242."""
+        rosout = self.rosout
+        keyframe_pub = rospy.Publisher('/keyframes', Keyframe, queue_size=10)
+        assert sds.wait_until(lambda: keyframe_pub.get_num_connections() >= 2, 30)
+        time.sleep(0.5)
+        session = 4242
+
+        def keyframe(kf_id, stamp):
+            k = Keyframe()
+            k.header.stamp = rospy.Time.from_sec(stamp)
+            k.session, k.id = session, kf_id
+            k.T_kf_world.orientation.w = 1.0
+            k.T_kf_world.position.x = -0.1
+            k.camera = copy.deepcopy(self.info)
+            return k
+
+        bad = []
+        zero_k = keyframe(2, 2010.0)
+        zero_k.camera.K = [0.0] * 9
+        nan_k = keyframe(2, 2011.0)
+        nan_k.camera.K = [float('nan')] + list(nan_k.camera.K[1:])
+        far = keyframe(2, 2012.0)
+        far.T_kf_world.position.z = 1e9
+        crowded = keyframe(2, 2013.0)
+        crowded.observations = [Observation(point_id=1, x=0.0, y=0.0)] * 50000
+        ahead = keyframe(5002, 2014.0)
+        for k in (zero_k, nan_k, far, crowded, ahead):
+            keyframe_pub.publish(k)
+            time.sleep(0.3)
+        keyframe_pub.publish(keyframe(2, 2002.0))  # the real keyframe 2
+        # One line per kind of refusal (throttled): the camera's, then the content's.
+        self.assertTrue(rosout.wait_for('mapping_node', 'keyframe 2 refused', 'camera',
+                                        level=Log.ERROR), rosout.dump('mapping_node'))
+        self.assertTrue(rosout.wait_for('mapping_node', 'keyframe 2 has a pose 1e+09',
+                                        level=Log.WARN), rosout.dump('mapping_node'))
+        path = os.path.join(sds.work_dir(), 'bad_input_keyframes.txt')
+        save = rospy.ServiceProxy('/mapping_node/save_trajectory', SaveTrajectory)
+
+        def saved_stamps():
+            response = save(path=path)
+            self.assertTrue(response.success, response.message)
+            with open(path) as f:
+                rows = [line.split() for line in f if not line.startswith('#')]
+            self.assertTrue(all(abs(float(v)) < 1e3 for row in rows for v in row[1:4]), rows)
+            return [round(float(row[0]), 3) for row in rows]
+        self.assertTrue(sds.wait_until(lambda: 2002.0 in saved_stamps(), 10))
+        self.assertEqual(saved_stamps(), [2000.0, 2001.0, 2002.0])
+        self.assertAlive('/tracking_node', '/mapping_node', '/loop_closure_node')
 
 
 if __name__ == '__main__':

@@ -4,7 +4,8 @@
 // out. It owns the session rule of the loop closer's side: a new tracker session's first keyframe
 // (id 0) starts a new LoopCloser (with the camera the keyframe comes with), checked before the old
 // one is thrown away, and no other keyframe of another session replaces it; updates of another
-// session are dropped; a restarted mapper is followed through map-version epochs (map_versions.h)
+// session are dropped; every message is validated first (message_validation.h) and a refused one
+// changes nothing; a restarted mapper is followed through map-version epochs (map_versions.h)
 // and the loop closer's copy of the map is kept. Driven by system::SlamSystem's loop thread offline
 // and by the ROS loop-closure node's worker thread.
 
@@ -20,6 +21,7 @@
 #include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/system/envelope.h"
 #include "scale_drift_slam/system/map_versions.h"
+#include "scale_drift_slam/system/message_validation.h"
 
 namespace scale_drift_slam::system {
 
@@ -27,7 +29,8 @@ class LoopCloserEndpoint {
  public:
   using CameraSource = std::function<std::shared_ptr<const geometry::CameraModel>()>;
 
-  explicit LoopCloserEndpoint(loop::LoopCloserParams params);
+  /// `limits`: what a message must pass to be taken (message_validation.h).
+  explicit LoopCloserEndpoint(loop::LoopCloserParams params, MessageLimits limits = {});
 
   struct KeyframeOutcome {
     bool added = false;
@@ -44,10 +47,11 @@ class LoopCloserEndpoint {
   struct UpdateOutcome {
     bool applied = false;
     bool new_mapper = false;  ///< The first update of a mapper after another one's.
+    std::string refusal;      ///< Why an invalid update was refused (message_validation.h).
   };
   UpdateOutcome applyMapUpdate(const Envelope& from, map::MapUpdate update);
 
-  /// Answers a request; one of another session fails with the reason.
+  /// Answers a request; one of another session, or an invalid one, fails with the reason.
   Addressed<map::RelocalisationAnswer> relocalise(const Envelope& from,
                                                   const map::RelocalisationRequest& request);
 
@@ -68,7 +72,10 @@ class LoopCloserEndpoint {
     return {session_, versions_.mapperId(), versions_.toMapper(loop_closer_version)};
   }
 
+  std::string admissionProblem(const Envelope& from, const map::KeyframeMessage& keyframe) const;
+
   loop::LoopCloserParams params_;
+  MessageLimits limits_;
   std::uint32_t session_ = 0;
   std::optional<loop::LoopCloser> closer_;
   MapVersionTranslator versions_;

@@ -4,10 +4,11 @@
 // side: a new tracker session's first keyframe (id 0) starts a new map (the tracker was reset or
 // started a new map), checked before anything is thrown away; no other keyframe of another session
 // replaces the map (a stray or forged one); a constraint of another session is
-// refused; every update leaves in this mapper's numbering (its id and map version). A reset takes
-// a new mapper id, so that receivers know its versions count from 0 again. Driven by
-// system::SlamSystem's mapping thread offline and by the ROS mapping node's callbacks: one
-// thread at a time.
+// refused; every message is validated first (message_validation.h: content, and a keyframe id far
+// ahead of the map's newest) and a refused one changes nothing; every update leaves in this
+// mapper's numbering (its id and map version). A reset takes a new mapper id, so that receivers
+// know its versions count from 0 again. Driven by system::SlamSystem's mapping thread offline and
+// by the ROS mapping node's callbacks: one thread at a time.
 
 #include <cstdint>
 #include <functional>
@@ -17,12 +18,14 @@
 #include "scale_drift_slam/features/bundle_statistics.h"
 #include "scale_drift_slam/mapping/mapper.h"
 #include "scale_drift_slam/system/envelope.h"
+#include "scale_drift_slam/system/message_validation.h"
 
 namespace scale_drift_slam::system {
 
 class MapperEndpoint {
  public:
-  MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id);
+  /// `limits`: what a message must pass to be taken (message_validation.h).
+  MapperEndpoint(mapping::MapperParams params, std::uint32_t mapper_id, MessageLimits limits = {});
 
   struct KeyframeOutcome {
     bool added = false;
@@ -37,7 +40,8 @@ class MapperEndpoint {
                               const std::function<double()>& focal_length_px);
 
   struct LoopOutcome {
-    bool stale = false;  ///< Of another tracker session (a discarded map): dropped.
+    bool stale = false;   ///< Of another tracker session (a discarded map): dropped.
+    std::string refusal;  ///< Why an invalid constraint was refused (message_validation.h).
     mapping::LoopCorrectionStatistics statistics;  ///< `applied`, or the reason why not.
     std::optional<Addressed<map::MapUpdate>> update;
   };
@@ -62,7 +66,10 @@ class MapperEndpoint {
   bool isCurrent(std::uint32_t session) const { return mapper_ && session == session_; }
   Addressed<map::MapUpdate> address(map::MapUpdate update) const;
 
+  std::string admissionProblem(const Envelope& from, const map::KeyframeMessage& keyframe) const;
+
   mapping::MapperParams params_;
+  MessageLimits limits_;
   std::uint32_t mapper_id_;
   std::uint32_t session_ = 0;
   std::optional<mapping::Mapper> mapper_;  ///< Made at the first keyframe of a session.

@@ -5,6 +5,7 @@
 
 #include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/mapping/mapper.h"
+#include "scale_drift_slam/system/message_validation.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::system {
@@ -13,6 +14,7 @@ struct SlamParams {
   tracking::TrackerParams tracker;
   mapping::MapperParams mapper;
   loop::LoopCloserParams loop;
+  MessageLimits messages;      ///< What a message between the parts must pass to be taken.
   bool mapping_thread = true;  ///< Mapper and loop closer on their own threads.
   void validate() const;
 };

@@ -94,6 +94,8 @@ class SlamSystem {
                                  Addressed<map::RelocalisationRequest>>;
 
   void runInline();
+  /// Applies what the tracker's inbox holds; logs the messages it refused.
+  void drainInbox();
   template <typename Input>
   void handleSafely(Input input);
   void handle(MapperInput input);
@@ -110,7 +112,7 @@ class SlamSystem {
   std::uint32_t session_ = 1;  ///< The tracker's; a new one at each map restart.
   common::MessageQueue<MapperInput> mapper_inbox_;
   common::MessageQueue<LoopInput> loop_inbox_;
-  TrackerInbox tracker_inbox_;
+  TrackerInbox tracker_inbox_{params_.messages};
   mutable std::mutex record_mutex_;  ///< Guards the records below (written by the threads).
   std::vector<mapping::LoopCorrectionStatistics> loops_;
   BackgroundTimes times_;
