@@ -399,10 +399,11 @@ void printSummary(const RunOptions& options, const system::SlamSystem& slam, con
     std::cout << " " << state << " " << count;
   std::cout << "\nloops closed: " << loopsJson(slam).size()
             << ", relocalisations: " << slam.relocalisations()
-            << ", young maps discarded: " << slam.mapRestarts()
-            << (slam.mapRestarts() > 0
-                    ? " (their poses: trajectory[_as_tracked]_map<K>_discarded.txt)"
-                    : "");
+            << ", young maps discarded: " << slam.mapRestarts();
+  for (int k = 0; k < slam.mapRestarts(); ++k) {
+    std::cout << (k ? ", " : " (their poses: ") << "trajectory[_as_tracked]_map" << k
+              << "_discarded.txt" << (k + 1 == slam.mapRestarts() ? ")" : "");
+  }
   std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
             << " points, " << slam.map().numObservations() << " observations\n"
             << tally.timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
