@@ -73,8 +73,23 @@ int expectedType(PixelEncoding encoding) {
 
 }  // namespace
 
-cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding) {
+int significantBits(const cv::Mat& mono16) {
+  if (mono16.type() != CV_16UC1)
+    throw std::invalid_argument("significantBits needs a 16-bit image");
+  double largest = 0.0;
+  if (!mono16.empty()) cv::minMaxLoc(mono16, nullptr, &largest);
+  int bits = 8;
+  while (bits < 16 && largest >= static_cast<double>(1 << bits))
+    ++bits;
+  return bits;
+}
+
+cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding, int mono16_bits) {
   if (image.empty()) throw std::invalid_argument("empty image");
+  if (mono16_bits < 8 || mono16_bits > 16) {
+    throw std::invalid_argument("16-bit images hold 8 to 16 bits, not " +
+                                std::to_string(mono16_bits));
+  }
   if (image.type() != expectedType(encoding)) {
     throw std::invalid_argument("image announced as " + pixelEncodingName(encoding) + " has " +
                                 std::to_string(image.channels()) + " channel(s) of " +
@@ -86,7 +101,7 @@ cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding) {
       grey = image.clone();
       break;
     case PixelEncoding::kMono16:
-      image.convertTo(grey, CV_8U, 1.0 / 256.0);
+      image.convertTo(grey, CV_8U, 1.0 / (1 << (mono16_bits - 8)));
       break;
     case PixelEncoding::kBgr8:
       cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);

@@ -47,6 +47,18 @@ void CameraCalibration::validate() const {
     s << "image size must be positive (width=" << width << ", height=" << height << ")";
     fail(s.str());
   }
+  if (width > 100000 || height > 100000) {
+    std::ostringstream s;
+    s << "image size " << width << "x" << height << " is beyond any camera's (at most 100000)";
+    fail(s.str());
+  }
+  // Beyond 100x the image size the field of view is under 0.6 degrees: a unit or typing error.
+  if (fx > 100.0 * width || fy > 100.0 * height) {
+    std::ostringstream s;
+    s << "focal length (fx=" << fx << ", fy=" << fy << ") is more than 100x the " << width << "x"
+      << height << " image: not a camera's (pixels expected)";
+    fail(s.str());
+  }
   if (cx < -width || cx > 2.0 * width || cy < -height || cy > 2.0 * height) {
     std::ostringstream s;
     s << "principal point (" << cx << ", " << cy << ") is far outside the " << width << "x"
@@ -63,6 +75,14 @@ void CameraCalibration::validate() const {
   for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(distortion[i])) {
       fail("distortion coefficient " + std::to_string(i) + " is not a finite number");
+    }
+    // Real lenses have coefficients of order 1 (a strong fisheye: tens); beyond, the
+    // projection overflows for points inside the image.
+    if (std::abs(distortion[i]) > 1000.0) {
+      std::ostringstream s;
+      s << "distortion coefficient " << i << " (" << distortion[i]
+        << ") is beyond any lens's (|coefficient| <= 1000)";
+      fail(s.str());
     }
   }
 }

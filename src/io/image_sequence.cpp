@@ -1,7 +1,11 @@
 #include "scale_drift_slam/io/image_sequence.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,8 +18,11 @@ namespace fs = std::filesystem;
 
 FileImageSequence::FileImageSequence(std::vector<std::pair<double, std::string>> frames,
                                      std::optional<geometry::CameraCalibration> calibration,
-                                     std::string kind)
-    : frames_(std::move(frames)), calibration_(std::move(calibration)), kind_(std::move(kind)) {}
+                                     std::string kind, std::vector<std::string> warnings)
+    : frames_(std::move(frames)),
+      warnings_(std::move(warnings)),
+      calibration_(std::move(calibration)),
+      kind_(std::move(kind)) {}
 
 std::optional<SequenceFrame> FileImageSequence::next() {
   if (index_ >= frames_.size()) return std::nullopt;
@@ -54,39 +61,127 @@ std::vector<std::string> splitFields(const std::string& line, char separator) {
   return fields;
 }
 
-/// Reads "<time> <file>" (TUM) or "<time_ns>,<file>" (EuRoC) lines; `time_scale` to seconds.
-std::vector<std::pair<double, std::string>> readList(const fs::path& list, const fs::path& images,
-                                                     char separator, double time_scale) {
-  std::ifstream file(list);
-  if (!file) fail(list, "cannot open the file");
-  std::vector<std::pair<double, std::string>> frames;
+/// A stamp field: a finite number (std::stod also takes "nan" and "inf": refused).
+double parseStamp(const std::string& field, double time_scale, const std::string& origin,
+                  int line) {
+  double time = 0.0;
+  try {
+    std::size_t used = 0;
+    time = std::stod(field, &used) * time_scale;
+    if (used != field.size()) throw std::invalid_argument("bad number");
+  } catch (const std::exception&) {
+    time = std::numeric_limits<double>::quiet_NaN();
+  }
+  if (!std::isfinite(time)) {
+    fail(origin,
+         "line " + std::to_string(line) + ": the timestamp '" + field + "' is not a finite number");
+  }
+  return time;
+}
+
+struct ListedFrame {
+  double time;
+  std::string path;
+  int line;
+};
+
+/// Sorts by stamp (stable) and drops repeated stamps; says what it did.
+std::vector<std::string> sortStamps(std::vector<ListedFrame>* frames, const std::string& origin) {
+  std::vector<std::string> warnings;
+  int back = 0, first_back = 0;
+  for (std::size_t i = 1; i < frames->size(); ++i) {
+    if ((*frames)[i].time < (*frames)[i - 1].time && back++ == 0) first_back = (*frames)[i].line;
+  }
+  if (frames->size() > 1 && frames->front().time == frames->back().time && back == 0) {
+    bool all_equal = true;
+    for (const ListedFrame& f : *frames)
+      all_equal = all_equal && f.time == frames->front().time;
+    if (all_equal) {
+      warnings.push_back("'" + origin + "': all " + std::to_string(frames->size()) +
+                         " timestamps are equal: only the first frame is used");
+    }
+  }
+  if (back > 0) {
+    std::stable_sort(frames->begin(), frames->end(),
+                     [](const ListedFrame& a, const ListedFrame& b) { return a.time < b.time; });
+    warnings.push_back("'" + origin + "': " + std::to_string(back) +
+                       " timestamp(s) go back in time (first at line " +
+                       std::to_string(first_back) + "): the frames are read sorted by timestamp");
+  }
+  std::vector<ListedFrame> unique;
+  int duplicates = 0, first_duplicate = 0;
+  for (const ListedFrame& f : *frames) {
+    if (!unique.empty() && f.time == unique.back().time) {
+      if (duplicates++ == 0) first_duplicate = f.line;
+      continue;
+    }
+    unique.push_back(f);
+  }
+  if (duplicates > 0 && unique.size() > 1) {
+    warnings.push_back("'" + origin + "': " + std::to_string(duplicates) +
+                       " frame(s) repeat an earlier timestamp (first at line " +
+                       std::to_string(first_duplicate) +
+                       "): dropped, the first frame of each timestamp is used");
+  }
+  *frames = std::move(unique);
+  return warnings;
+}
+
+}  // namespace
+
+FrameList parseFrameList(const std::string& text, ListFormat format, const std::string& origin,
+                         const std::string& image_dir) {
+  std::istringstream stream(text);
+  std::vector<ListedFrame> listed;
   std::string line;
-  for (int number = 1; std::getline(file, line); ++number) {
+  for (int number = 1; std::getline(stream, line); ++number) {
     if (line.empty() || line[0] == '#' || line.find_first_not_of(" \t\r") == std::string::npos) {
       continue;
     }
-    const std::vector<std::string> fields = splitFields(line, separator);
-    double time = 0.0;
-    try {
-      if (fields.size() < 2) throw std::invalid_argument("too few fields");
-      std::size_t used = 0;
-      time = std::stod(fields[0], &used) * time_scale;
-      if (used != fields[0].size()) throw std::invalid_argument("bad number");
-    } catch (const std::exception&) {
-      fail(list, "line " + std::to_string(number) + " is not '<timestamp> <image>'");
+    if (format == ListFormat::kKittiTimes) {
+      const std::vector<std::string> fields = splitFields(line, ' ');
+      if (fields.size() != 1)
+        fail(origin, "line " + std::to_string(number) + " is not '<seconds>'");
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06zu.png", listed.size());
+      listed.push_back({parseStamp(fields[0], 1.0, origin, number),
+                        (fs::path(image_dir) / name).string(), number});
+      continue;
     }
-    frames.emplace_back(time, (images / fields[1]).string());
+    const bool tum = format == ListFormat::kTum;
+    const std::vector<std::string> fields = splitFields(line, tum ? ' ' : ',');
+    if (fields.size() < 2 || fields[1].empty()) {
+      fail(origin, "line " + std::to_string(number) + " is not '<timestamp>" + (tum ? " " : ",") +
+                       "<image>'");
+    }
+    listed.push_back({parseStamp(fields[0], tum ? 1.0 : 1e-9, origin, number),
+                      (fs::path(image_dir) / fields[1]).string(), number});
   }
-  if (frames.empty()) fail(list, "lists no images");
-  return frames;
+  if (listed.empty()) fail(origin, "lists no images");
+  FrameList list;
+  list.warnings = sortStamps(&listed, origin);
+  for (ListedFrame& f : listed)
+    list.frames.emplace_back(f.time, std::move(f.path));
+  return list;
+}
+
+namespace {
+
+FrameList readList(const fs::path& list, ListFormat format, const fs::path& images) {
+  std::ifstream file(list);
+  if (!file) fail(list, "cannot open the file");
+  std::stringstream text;
+  text << file.rdbuf();
+  return parseFrameList(text.str(), format, list.string(), images.string());
 }
 
 std::unique_ptr<ImageSequence> openTum(const fs::path& dir) {
   std::optional<geometry::CameraCalibration> calibration;
   if (fs::exists(dir / "camera.yaml"))
     calibration = loadCalibrationYaml((dir / "camera.yaml").string());
-  return std::make_unique<FileImageSequence>(readList(dir / "rgb.txt", dir, ' ', 1.0), calibration,
-                                             "TUM");
+  FrameList list = readList(dir / "rgb.txt", ListFormat::kTum, dir);
+  return std::make_unique<FileImageSequence>(std::move(list.frames), calibration, "TUM",
+                                             std::move(list.warnings));
 }
 
 std::unique_ptr<ImageSequence> openEuroc(const fs::path& mav0) {
@@ -94,28 +189,22 @@ std::unique_ptr<ImageSequence> openEuroc(const fs::path& mav0) {
   std::optional<geometry::CameraCalibration> calibration;
   if (fs::exists(cam / "sensor.yaml"))
     calibration = loadCalibrationYaml((cam / "sensor.yaml").string());
-  return std::make_unique<FileImageSequence>(readList(cam / "data.csv", cam / "data", ',', 1e-9),
-                                             calibration, "EuRoC");
+  FrameList list = readList(cam / "data.csv", ListFormat::kEuroc, cam / "data");
+  return std::make_unique<FileImageSequence>(std::move(list.frames), calibration, "EuRoC",
+                                             std::move(list.warnings));
 }
 
 std::unique_ptr<ImageSequence> openKitti(const fs::path& dir) {
-  std::ifstream times(dir / "times.txt");
-  if (!times) fail(dir / "times.txt", "cannot open the file");
-  std::vector<std::pair<double, std::string>> frames;
-  double t = 0.0;
-  for (int i = 0; times >> t; ++i) {
-    char name[16];
-    std::snprintf(name, sizeof(name), "%06d.png", i);
-    frames.emplace_back(t, (dir / "image_0" / name).string());
-  }
-  if (frames.empty()) fail(dir / "times.txt", "lists no times");
+  FrameList list = readList(dir / "times.txt", ListFormat::kKittiTimes, dir / "image_0");
+  std::vector<std::pair<double, std::string>>& frames = list.frames;
   std::optional<geometry::CameraCalibration> calibration;
   if (fs::exists(dir / "calib.txt")) {
     const cv::Mat first = cv::imread(frames.front().second, cv::IMREAD_UNCHANGED);
     if (first.empty()) fail(frames.front().second, "cannot read the first image");
     calibration = loadKittiCalibration((dir / "calib.txt").string(), first.cols, first.rows);
   }
-  return std::make_unique<FileImageSequence>(std::move(frames), calibration, "KITTI");
+  return std::make_unique<FileImageSequence>(std::move(frames), calibration, "KITTI",
+                                             std::move(list.warnings));
 }
 
 }  // namespace

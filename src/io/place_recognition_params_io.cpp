@@ -1,12 +1,16 @@
 #include "scale_drift_slam/io/place_recognition_params_io.h"
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include <yaml-cpp/yaml.h>
+
+#include "scale_drift_slam/io/key_suggestion.h"
 
 namespace scale_drift_slam::io {
 namespace {
@@ -19,7 +23,13 @@ using Setter = std::function<void(const YAML::Node&)>;
 
 template <typename T>
 Setter set(T& field) {
-  return [&field](const YAML::Node& node) { field = node.as<T>(); };
+  return [&field](const YAML::Node& node) {
+    const T value = node.as<T>();
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!std::isfinite(value)) throw std::domain_error("not a finite number");
+    }
+    field = value;
+  };
 }
 
 /// Applies every key of `section` through its setter; unknown keys and wrong kinds fail.
@@ -27,14 +37,22 @@ void apply(const YAML::Node& section, const std::string& prefix,
            const std::map<std::string, Setter>& setters, const std::string& origin) {
   if (!section.IsMap()) fail(origin, "'" + prefix + "' must be a mapping of keys");
   for (const auto& entry : section) {
-    const std::string key = entry.first.as<std::string>();
+    if (!entry.first.IsScalar()) fail(origin, "'" + prefix + "' holds a key that is not a name");
+    const std::string key = entry.first.Scalar();
     const auto setter = setters.find(key);
     const std::string name = prefix + key;
-    if (setter == setters.end()) fail(origin, "unknown key '" + name + "'");
+    if (setter == setters.end()) {
+      std::vector<std::string> names;
+      for (const auto& [known, unused] : setters)
+        names.push_back(prefix + known);
+      fail(origin, unknownKeyMessage("key", name, names));
+    }
     try {
       setter->second(entry.second);
     } catch (const YAML::Exception&) {
       fail(origin, "key '" + name + "' does not hold the expected kind of value");
+    } catch (const std::domain_error& e) {
+      fail(origin, "key '" + name + "' is " + e.what());
     }
   }
 }

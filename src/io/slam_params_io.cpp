@@ -1,6 +1,7 @@
 #include "scale_drift_slam/io/slam_params_io.h"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -11,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "scale_drift_slam/io/key_suggestion.h"
 #include "scale_drift_slam/io/place_recognition_params_io.h"
 
 namespace scale_drift_slam::io {
@@ -37,6 +39,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "min_contrast", &t.min_contrast},
       {"tracker", "contrast_target_range", &t.contrast_target_range},
       {"tracker", "max_contrast_gain", &t.max_contrast_gain},
+      {"tracker", "mono16_bit_depth", &t.mono16_bit_depth},
       {"tracker", "good_inliers", &t.good_inliers},
       {"tracker", "min_inliers", &t.min_inliers},
       {"tracker", "local_recent_keyframes", &t.local_recent_keyframes},
@@ -211,7 +214,9 @@ void readField(const Field& field, const YAML::Node& node, const std::string& or
     } else if (auto* i = std::get_if<int*>(&field.value)) {
       **i = node.as<int>();
     } else if (auto* d = std::get_if<double*>(&field.value)) {
-      **d = node.as<double>();
+      const double value = node.as<double>();
+      if (!std::isfinite(value)) fail(origin, "'" + name + "' must be a finite number");
+      **d = value;
     } else if (auto* b = std::get_if<bool*>(&field.value)) {
       **b = node.as<bool>();
     }
@@ -220,6 +225,22 @@ void readField(const Field& field, const YAML::Node& node, const std::string& or
   } catch (const std::invalid_argument& e) {
     fail(origin, "'" + name + "': " + e.what());
   }
+}
+
+/// "unknown key 'section.key'" with the closest key of the file, or the section that has it.
+std::string unknownKey(const std::string& section, const std::string& key,
+                       const std::map<std::string, std::set<std::string>>& known) {
+  std::vector<std::string> keys;
+  for (const auto& [other, other_keys] : known) {
+    for (const std::string& other_key : other_keys)
+      keys.push_back(other + "." + other_key);
+  }
+  const std::string name = section + "." + key;
+  if (!closestKey(name, keys).empty()) return unknownKeyMessage("key", name, keys);
+  for (const auto& [other, other_keys] : known) {  // the right key in the wrong section
+    if (other_keys.count(key)) return unknownKeyMessageSuggesting("key", name, other + "." + key);
+  }
+  return unknownKeyMessage("key", name, keys);
 }
 
 }  // namespace
@@ -238,8 +259,12 @@ system::SlamParams parseSlamParams(const std::string& text, const std::string& o
   std::map<std::string, std::set<std::string>> known;
   for (const Field& field : fields)
     known[field.section].insert(field.key);
+  std::vector<std::string> sections = {"place_recognition"};
+  for (const auto& entry : known)
+    sections.push_back(entry.first);
   for (const auto& section : root) {
-    const std::string name = section.first.as<std::string>();
+    if (!section.first.IsScalar()) fail(origin, "a section name is not text");
+    const std::string name = section.first.Scalar();
     if (name == "place_recognition") {
       // Its own loader (io/place_recognition_params_io.h) and layout
       // (config/place_recognition.yaml).
@@ -247,11 +272,13 @@ system::SlamParams parseSlamParams(const std::string& text, const std::string& o
           parsePlaceRecognitionParams(YAML::Dump(section.second), origin + " place_recognition");
       continue;
     }
-    if (!known.count(name)) fail(origin, "unknown section '" + name + "'");
+    if (!known.count(name)) fail(origin, unknownKeyMessage("section", name, sections));
     if (!section.second.IsMap()) fail(origin, "section '" + name + "' must be a mapping");
     for (const auto& entry : section.second) {
-      const std::string key = entry.first.as<std::string>();
-      if (!known[name].count(key)) fail(origin, "unknown key '" + name + "." += key + "'");
+      if (!entry.first.IsScalar())
+        fail(origin, "section '" + name + "' holds a key that is not a name");
+      const std::string key = entry.first.Scalar();
+      if (!known[name].count(key)) fail(origin, unknownKey(name, key, known));
     }
   }
   for (const Field& field : fields) {

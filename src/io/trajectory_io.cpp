@@ -1,5 +1,6 @@
 #include "scale_drift_slam/io/trajectory_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -57,6 +58,22 @@ std::vector<StampedPose> loadTrajectory(const std::string& path) {
     poses.push_back(pose);
   }
   return poses;
+}
+
+std::size_t sortAndDropRepeatedStamps(std::vector<StampedPose>* poses, std::size_t* reordered) {
+  std::size_t back = 0;
+  for (std::size_t i = 1; i < poses->size(); ++i)
+    back += (*poses)[i].timestamp < (*poses)[i - 1].timestamp ? 1 : 0;
+  if (reordered) *reordered = back;
+  std::stable_sort(poses->begin(), poses->end(), [](const StampedPose& a, const StampedPose& b) {
+    return a.timestamp < b.timestamp;
+  });
+  const auto end = std::unique(
+      poses->begin(), poses->end(),
+      [](const StampedPose& a, const StampedPose& b) { return a.timestamp == b.timestamp; });
+  const std::size_t dropped = static_cast<std::size_t>(poses->end() - end);
+  poses->erase(end, poses->end());
+  return dropped;
 }
 
 void saveTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "scale_drift_slam/io/calibration_io.h"
+#include "scale_drift_slam/io/key_suggestion.h"
 #include "scale_drift_slam/io/slam_params_io.h"
 
 namespace scale_drift_slam::ros_conversions {
@@ -70,11 +71,17 @@ class Reader {
       fail(key, "must be a number, got " + kindName(v.getType()));
     }
   }
-  /// Names of the private namespace that were neither read nor are SLAM sections.
+  /// Names of the private namespace that were neither read nor are SLAM sections, each with
+  /// " (did you mean '~x'?)" when it is close to one that is.
   std::vector<std::string> unknown(const std::set<std::string>& sections) {
+    std::vector<std::string> accepted(known_.begin(), known_.end());
+    accepted.insert(accepted.end(), sections.begin(), sections.end());
     std::vector<std::string> names;
     for (auto it = params_.begin(); it != params_.end(); ++it) {
-      if (!known_.count(it->first) && !sections.count(it->first)) names.push_back("~" + it->first);
+      if (known_.count(it->first) || sections.count(it->first)) continue;
+      const std::string suggestion = io::closestKey(it->first, accepted);
+      names.push_back("~" + it->first +
+                      (suggestion.empty() ? "" : " (did you mean '~" + suggestion + "'?)"));
     }
     return names;
   }

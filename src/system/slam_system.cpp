@@ -59,12 +59,23 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
                                                features::PixelEncoding encoding) {
   started_ = true;
   drainInbox();
+  const int mono16_bits = tracker_.mono16BitDepth();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
+  if (tracker_.mono16BitDepth() != mono16_bits) {
+    log("16-bit images are read as " + std::to_string(tracker_.mono16BitDepth()) +
+        "-bit data (scaled by 1/" + std::to_string(1 << (tracker_.mono16BitDepth() - 8)) +
+        (params_.tracker.mono16_bit_depth > 0 ? ", tracker.mono16_bit_depth)"
+                                              : ", from the largest value so far; set "
+                                                "tracker.mono16_bit_depth or --bit-depth to fix "
+                                                "it)"));
+  }
   if (result.map_restarted) {
     // A new session: its first keyframe starts a new map at the mapper and the loop closer.
     tracker_inbox_.startSession(++session_);
     ++map_restarts_;
-    trajectory_ = map::CorrectedTrajectory();  // its frames are in the discarded map's frame
+    // Its frames are in the discarded map's frame: kept apart, never mixed with the new map's.
+    discarded_trajectories_.push_back(std::move(trajectory_));
+    trajectory_ = map::CorrectedTrajectory();
   }
   if (result.has_pose) trajectory_.add(timestamp, result.T_cam_world, result.reference_keyframe);
   if (!finished_) {

@@ -1,10 +1,13 @@
 // run_sequence: the whole SLAM offline, in one process (tracking on this thread, the window BA and
 // the loop closure on their own threads), on a TUM, EuRoC or KITTI folder or a rosbag. Writes
-// DIR/trajectory.txt (every tracked frame, corrected by the loop closures, TUM, T_world_cam),
-// DIR/trajectory_as_tracked.txt (the poses as they were output live), DIR/keyframes.txt (the
-// mapper's final keyframes, TUM), DIR/keyframes_before_loop_N.txt (the keyframes just before the
-// N-th loop correction), DIR/frames.csv (each frame's tracking state, counts and message) and
-// DIR/summary.json (counts, loops, per-stage timing, memory).
+// DIR/trajectory.txt (every frame tracked in the final map, corrected by the loop closures, TUM,
+// T_world_cam), DIR/trajectory_as_tracked.txt (the poses as they were output live), per young map
+// discarded after a loss DIR/trajectory_map<K>_discarded.txt and
+// DIR/trajectory_as_tracked_map<K>_discarded.txt (its own frame, never mixed with the final
+// map's), DIR/keyframes.txt (the mapper's final keyframes, TUM), DIR/keyframes_before_loop_N.txt
+// (the keyframes just before the N-th loop correction), DIR/frames.csv (each frame's tracking
+// state, map, counts and message) and DIR/summary.json (counts, maps, loops, per-stage timing,
+// memory). Exits non-zero with the reason when no frame was tracked.
 
 #include <unistd.h>
 
@@ -46,12 +49,14 @@ calib.txt) or a rosbag (*.bag).
   --out DIR            output folder: trajectory.txt (corrected by loop closures),
                        trajectory_as_tracked.txt, keyframes.txt (TUM), frames.csv,
                        summary.json, keyframes_before_loop_N.txt (the keyframes just
-                       before the N-th loop correction, TUM)
+                       before the N-th loop correction, TUM); the poses of each young map
+                       discarded after a loss in trajectory[_as_tracked]_map<K>_discarded.txt
   --calib FILE         calibration YAML (default: the dataset's own, or the bag's CameraInfo)
   --config FILE        SLAM parameters (default: built-in defaults = config/default.yaml)
   --topic NAME         bag image topic (default /camera/image_raw)
   --camera-info-topic NAME   bag CameraInfo topic (default /camera/camera_info)
   --max-frames N       stop after N frames (default: all)
+  --bit-depth N        16-bit images hold N-bit data (8..16; default: from their values)
   --se3                correct loops with the SE(3) pose graph (the paper's baseline)
   --no-loop-closure    no loop closure (relocalisation still works)
   --save-map FILE      save the map at the end (doc/map_file.md)
@@ -59,6 +64,8 @@ calib.txt) or a rosbag (*.bag).
                        trajectory in its frame, and extend it (new keyframes, loops)
   --localization       with --load-map: localise only, add no keyframe, leave the map as it is
   --quiet              no progress bar, no parameter dump
+Exits with 1 and the reason when no frame was tracked (every frame rejected, or the map never
+initialised); the outputs are written all the same.
 )";
 
 std::unique_ptr<io::ImageSequence> openDataset(const io::CommandLine& args,
@@ -97,7 +104,9 @@ tracking::FrameResult processOne(system::SlamSystem& slam, const io::SequenceFra
   } catch (const std::invalid_argument& e) {  // empty or unsupported image: skip the frame
     tracking::FrameResult r;
     r.rejected = true;
-    r.message = std::string("frame rejected: ") + (frame.image.empty() ? "unreadable" : e.what());
+    r.message = std::string("frame rejected: ") + (!frame.problem.empty() ? frame.problem
+                                                   : frame.image.empty()  ? "unreadable"
+                                                                          : e.what());
     return r;
   }
 }
@@ -114,9 +123,9 @@ void addTimes(const tracking::FrameResult& r, io::StageTimings* timings) {
   timings->add("tracking_cpu", r.times.cpu);
 }
 
-std::vector<io::StampedPose> correctedTrajectory(const system::SlamSystem& slam) {
+std::vector<io::StampedPose> posesOf(const map::CorrectedTrajectory& trajectory) {
   std::vector<io::StampedPose> poses;
-  for (const map::CorrectedTrajectory::Frame& frame : slam.trajectory().frames())
+  for (const map::CorrectedTrajectory::Frame& frame : trajectory.frames())
     poses.push_back({frame.timestamp, frame.T_cam_world.inverse()});
   return poses;
 }
@@ -180,13 +189,14 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
 std::ofstream openFrameLog(const fs::path& path) {
   std::ofstream file(path);
   if (!file) throw std::runtime_error("cannot write '" + path.string() + "'");
-  file << "frame,timestamp,state,rejected,visible,found,inliers,keyframes,new_points,candidates,"
-          "relocalised,message\n";
+  file << "frame,timestamp,state,map,rejected,visible,found,inliers,keyframes,new_points,"
+          "candidates,relocalised,message\n";
   return file;
 }
 
 /// `candidates`: feature candidates alive after the frame (tracking::Tracker::numCandidates).
-void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameResult& r,
+/// `map`: the map the frame belongs to (0, then one more at each young map discarded).
+void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameResult& r, int map,
               std::size_t candidates, std::ofstream* file) {
   std::string message = r.message;
   std::replace(message.begin(), message.end(), '"', '\'');
@@ -194,9 +204,9 @@ void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameRe
   for (const map::KeyframeMessage& keyframe : r.keyframes)
     new_points += keyframe.new_points.size();
   *file << index << ',' << std::fixed << std::setprecision(6) << frame.timestamp << ','
-        << trackingStateName(r.state) << ',' << r.rejected << ',' << r.num_visible << ','
-        << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ',' << new_points
-        << ',' << candidates << ',' << r.relocalised << ",\"" << message << "\"\n";
+        << trackingStateName(r.state) << ',' << map << ',' << r.rejected << ',' << r.num_visible
+        << ',' << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ','
+        << new_points << ',' << candidates << ',' << r.relocalised << ",\"" << message << "\"\n";
 }
 
 /// What run_sequence was asked to do.
@@ -213,7 +223,7 @@ struct RunOptions {
 RunOptions parseOptions(const io::CommandLine& args) {
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
                            "quiet", "se3", "no-loop-closure", "save-map", "load-map",
-                           "localization"});
+                           "localization", "bit-depth"});
   RunOptions options;
   options.dataset = args.positional(0, "DATASET");
   options.out = args.required("out");
@@ -229,6 +239,10 @@ RunOptions parseOptions(const io::CommandLine& args) {
   if (args.has("config")) params = io::loadSlamParams(args.required("config"));
   if (args.has("se3")) params.mapper.loop_correction.graph.mode = loop::PoseGraphMode::kSE3;
   if (args.has("no-loop-closure")) params.loop.enabled = false;
+  if (args.has("bit-depth")) {
+    params.tracker.mono16_bit_depth = static_cast<int>(args.integer("bit-depth", 0));
+    params.validate();
+  }
   return options;
 }
 
@@ -242,9 +256,11 @@ geometry::CameraCalibration calibrationOf(const io::CommandLine& args, const std
 
 /// What the frame loop gathered.
 struct RunTally {
-  std::vector<io::StampedPose> trajectory;  // as output live
+  std::vector<std::vector<io::StampedPose>> as_tracked;  // as output live, per map (0, 1, ..)
+  std::size_t tracked = 0;                               // poses in all maps
   io::StageTimings timings;
   std::map<std::string, int> states;
+  std::map<std::string, int> rejections;  // by reason (the message up to its figures)
   int frames = 0;
   int rejected = 0;
 };
@@ -269,14 +285,20 @@ RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
     const double frame_ms = frame_timer.ms();
     if (r.rejected) {
       ++tally.rejected;
+      ++tally.rejections[r.message.substr(0, r.message.find(" ("))];
       std::cerr << (progress ? "\n" : "") << frame->source << ": " << r.message << "\n";
     } else {
       ++tally.states[trackingStateName(r.state)];
       addTimes(r, &tally.timings);
       if (r.state != tracking::TrackingState::kInitializing) tally.timings.add("frame", frame_ms);
     }
-    if (r.has_pose) tally.trajectory.push_back({frame->timestamp, r.T_cam_world.inverse()});
-    logFrame(tally.frames - 1, *frame, r, slam.tracker().numCandidates(), &frame_log);
+    const int map = slam.mapRestarts();
+    if (r.has_pose) {
+      tally.as_tracked.resize(std::max<std::size_t>(tally.as_tracked.size(), map + 1));
+      tally.as_tracked[map].push_back({frame->timestamp, r.T_cam_world.inverse()});
+      ++tally.tracked;
+    }
+    logFrame(tally.frames - 1, *frame, r, map, slam.tracker().numCandidates(), &frame_log);
     for (const std::string& line : slam.takeLog())
       std::cout << (progress ? "\n" : "") << line << "\n";
     if (progress && (tally.frames % 10 == 0 || tally.frames == static_cast<int>(total))) {
@@ -291,17 +313,56 @@ RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
   return tally;
 }
 
-/// trajectory.txt, trajectory_as_tracked.txt and keyframes.txt.
-void writeTrajectories(const RunOptions& options, const system::SlamSystem& slam,
-                       const RunTally& tally) {
+/// Writes one trajectory file, sorted by stamp with repeated stamps dropped (a bag's stamps can
+/// go back or repeat); says so in `notes`.
+void writePoses(const fs::path& path, std::vector<io::StampedPose> poses,
+                const std::string& comment, std::vector<std::string>* notes) {
+  std::size_t reordered = 0;
+  const std::size_t dropped = io::sortAndDropRepeatedStamps(&poses, &reordered);
+  if (reordered > 0 || dropped > 0) {
+    notes->push_back(path.filename().string() + ": " + std::to_string(reordered) +
+                     " pose(s) out of stamp order sorted, " + std::to_string(dropped) +
+                     " pose(s) repeating a stamp dropped");
+  }
+  io::saveTumTrajectory(path.string(), poses, comment);
+}
+
+/// What the outputs hold: the files written and what had to be fixed in them.
+struct OutputReport {
+  nlohmann::json maps = nlohmann::json::array();
+  std::vector<std::string> notes;
+};
+
+/// trajectory.txt, trajectory_as_tracked.txt (the final map), the same per discarded map, and
+/// keyframes.txt.
+OutputReport writeTrajectories(const RunOptions& options, const system::SlamSystem& slam,
+                               RunTally tally) {
   const fs::path& out = options.out;
-  const std::string& dataset = options.dataset;
-  io::saveTumTrajectory((out / "trajectory.txt").string(), correctedTrajectory(slam),
-                        "every tracked frame corrected by the loop closures, T_world_cam, "
-                        "run_sequence " +
-                            dataset);
-  io::saveTumTrajectory((out / "trajectory_as_tracked.txt").string(), tally.trajectory,
-                        "every tracked frame as output live, T_world_cam, run_sequence " + dataset);
+  const int final_map = slam.mapRestarts();
+  tally.as_tracked.resize(final_map + 1);
+  OutputReport report;
+  for (int k = 0; k <= final_map; ++k) {
+    const bool discarded = k < final_map;
+    const std::string suffix = discarded ? "_map" + std::to_string(k) + "_discarded" : "";
+    const std::string which =
+        discarded ? "map " + std::to_string(k) + " (discarded after a loss; its own frame)"
+                  : "map " + std::to_string(k) + " (the final map)";
+    const map::CorrectedTrajectory& corrected =
+        discarded ? slam.discardedTrajectories()[k] : slam.trajectory();
+    writePoses(out / ("trajectory" + suffix + ".txt"), posesOf(corrected),
+               "every frame tracked in " + which + ", corrected by the loop closures, " +
+                   "T_world_cam, run_sequence " + options.dataset,
+               &report.notes);
+    writePoses(out / ("trajectory_as_tracked" + suffix + ".txt"), tally.as_tracked[k],
+               "every frame tracked in " + which + " as output live, T_world_cam, run_sequence " +
+                   options.dataset,
+               &report.notes);
+    report.maps.push_back({{"map", k},
+                           {"discarded", discarded},
+                           {"tracked", tally.as_tracked[k].size()},
+                           {"trajectory", "trajectory" + suffix + ".txt"},
+                           {"trajectory_as_tracked", "trajectory_as_tracked" + suffix + ".txt"}});
+  }
   io::saveTumTrajectory((out / "keyframes.txt").string(), keyframePoses(slam.map()),
                         "keyframes after the last window BA, T_world_cam");
   int index = 0;
@@ -315,40 +376,70 @@ void writeTrajectories(const RunOptions& options, const system::SlamSystem& slam
                               std::to_string(loop.constraint.current_id) + " -> " +
                               std::to_string(loop.constraint.loop_id) + ", T_world_cam");
   }
+  return report;
+}
+
+/// Why nothing was tracked, from what the frames were told; "" when something was.
+std::string nothingTrackedReason(const RunTally& tally) {
+  if (tally.tracked > 0) return "";
+  if (tally.frames == 0) return "the dataset gave no frame";
+  std::string reasons;
+  for (const auto& [reason, count] : tally.rejections)
+    reasons += (reasons.empty() ? "" : "; ") + reason + " (" + std::to_string(count) + "x)";
+  if (tally.rejected == tally.frames) {
+    return "tracked nothing: all " + std::to_string(tally.frames) +
+           " frames were rejected: " + reasons;
+  }
+  return "tracked nothing: the map never initialised in " + std::to_string(tally.frames) +
+         " frames (" + std::to_string(tally.rejected) + " rejected" +
+         (reasons.empty() ? "" : ": " + reasons) +
+         "); check the calibration and that the camera moves sideways at the start";
 }
 
 void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
-                      const RunTally& tally, double startup_ms, double peak_mib) {
+                      const RunTally& tally, const OutputReport& outputs,
+                      const std::vector<std::string>& dataset_warnings, double startup_ms,
+                      double peak_mib) {
   const std::string& dataset = options.dataset;
-  const nlohmann::json summary = {
-      {"dataset", dataset},
-      {"frames", tally.frames},
-      {"rejected_frames", tally.rejected},
-      {"tracked", tally.trajectory.size()},
-      {"states", tally.states},
-      {"keyframes", slam.map().numKeyframes()},
-      {"points", slam.map().numPoints()},
-      {"observations", slam.map().numObservations()},
-      {"loops", loopsJson(slam)},
-      {"relocalisations", slam.relocalisations()},
-      {"map_restarts", slam.mapRestarts()},
-      {"loaded_map_keyframes", slam.restoredKeyframes()},
-      {"keyframes_added", slam.map().numKeyframes() - slam.restoredKeyframes()},
-      {"timing", tally.timings.toJson()},
-      {"startup_ms", startup_ms},
-      {"peak_memory_mib", peak_mib}};
+  const nlohmann::json summary = {{"dataset", dataset},
+                                  {"frames", tally.frames},
+                                  {"rejected_frames", tally.rejected},
+                                  {"tracked", tally.tracked},
+                                  {"tracked_final_map", outputs.maps.back()["tracked"]},
+                                  {"maps", outputs.maps},
+                                  {"rejections", tally.rejections},
+                                  {"dataset_warnings", dataset_warnings},
+                                  {"output_warnings", outputs.notes},
+                                  {"nothing_tracked", nothingTrackedReason(tally)},
+                                  {"states", tally.states},
+                                  {"keyframes", slam.map().numKeyframes()},
+                                  {"points", slam.map().numPoints()},
+                                  {"observations", slam.map().numObservations()},
+                                  {"loops", loopsJson(slam)},
+                                  {"relocalisations", slam.relocalisations()},
+                                  {"map_restarts", slam.mapRestarts()},
+                                  {"loaded_map_keyframes", slam.restoredKeyframes()},
+                                  {"keyframes_added",
+                                   slam.map().numKeyframes() - slam.restoredKeyframes()},
+                                  {"timing", tally.timings.toJson()},
+                                  {"startup_ms", startup_ms},
+                                  {"peak_memory_mib", peak_mib}};
   std::ofstream(options.out / "summary.json") << summary.dump(2) << "\n";
 }
 
 void printSummary(const RunOptions& options, const system::SlamSystem& slam, const RunTally& tally,
                   double startup_ms, double peak_mib) {
-  std::cout << "frames " << tally.frames << ", tracked " << tally.trajectory.size() << ", rejected "
+  std::cout << "frames " << tally.frames << ", tracked " << tally.tracked << ", rejected "
             << tally.rejected << "; states:";
   for (const auto& [state, count] : tally.states)
     std::cout << " " << state << " " << count;
   std::cout << "\nloops closed: " << loopsJson(slam).size()
             << ", relocalisations: " << slam.relocalisations()
             << ", young maps discarded: " << slam.mapRestarts();
+  for (int k = 0; k < slam.mapRestarts(); ++k) {
+    std::cout << (k ? ", " : " (their poses: ") << "trajectory[_as_tracked]_map" << k
+              << "_discarded.txt" << (k + 1 == slam.mapRestarts() ? ")" : "");
+  }
   std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
             << " points, " << slam.map().numObservations() << " observations\n"
             << tally.timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
@@ -394,15 +485,25 @@ int run(const io::CommandLine& args) {
   if (!options.quiet) std::cout << "# parameters\n" << io::formatSlamParams(options.params);
   std::cout << "dataset: " << options.dataset << " (" << sequence->describe() << ")\n"
             << "camera: " << calibration.describe() << "\n";
+  const std::vector<std::string> dataset_warnings = sequence->warnings();
+  for (const std::string& warning : dataset_warnings)
+    std::cerr << "warning: " << warning << "\n";
   system::SlamSystem slam(geometry::makeCameraModel(calibration), options.params);
   if (!options.load_map.empty()) loadMap(options, calibration, slam);
   const double startup_ms = timer.ms();
 
   const RunTally tally = trackSequence(options, *sequence, slam);
-  writeTrajectories(options, slam, tally);
+  const std::vector<std::string> all_warnings = sequence->warnings();  // a bag may add some
+  for (std::size_t i = dataset_warnings.size(); i < all_warnings.size(); ++i)
+    std::cerr << "warning: " << all_warnings[i] << "\n";
+  const OutputReport outputs = writeTrajectories(options, slam, tally);
+  for (const std::string& note : outputs.notes)
+    std::cerr << "warning: " << note << "\n";
   const double peak_mib = io::peakMemoryMiB();
-  writeSummaryJson(options, slam, tally, startup_ms, peak_mib);
+  writeSummaryJson(options, slam, tally, outputs, all_warnings, startup_ms, peak_mib);
   printSummary(options, slam, tally, startup_ms, peak_mib);
+  const std::string nothing = nothingTrackedReason(tally);
+  if (!nothing.empty()) throw std::runtime_error(nothing);
   if (!options.save_map.empty()) {
     if (slam.map().numKeyframes() == 0) {
       std::cerr << "run_sequence: no map to save to " << options.save_map << "\n";

@@ -21,6 +21,9 @@ void TrackerParams::validate() const {
   if (!(max_contrast_gain >= 1.0)) {
     throw std::invalid_argument("tracker.max_contrast_gain must be >= 1");
   }
+  if (mono16_bit_depth != 0 && (mono16_bit_depth < 8 || mono16_bit_depth > 16)) {
+    throw std::invalid_argument("tracker.mono16_bit_depth must be 0 (measured) or in [8, 16]");
+  }
   if (min_inliers < 6) throw std::invalid_argument("tracker.min_inliers must be >= 6");
   if (good_inliers < min_inliers) {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
@@ -103,7 +106,12 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   ++frame_index_;
   cv::Mat grey;
   try {
-    grey = features::toGrey(image, encoding);
+    if (encoding == features::PixelEncoding::kMono16 && image.type() == CV_16UC1) {
+      mono16_bits_ = params_.mono16_bit_depth > 0
+                         ? params_.mono16_bit_depth
+                         : std::max(mono16_bits_, features::significantBits(image));
+    }
+    grey = features::toGrey(image, encoding, mono16_bits_ > 0 ? mono16_bits_ : 16);
   } catch (const std::invalid_argument& e) {
     rejectFrame(e.what(), &result);
     restartYoungLostMap(&result);

@@ -29,6 +29,31 @@ TEST(ImagePreparation, AllEncodingsGiveTheSameGrey) {
   }
 }
 
+// Issue 17: 16-bit PNGs holding 12-bit data were scaled by 1/256, so every frame used 1/16 of
+// the grey range and was rejected as "no texture".
+TEST(ImagePreparation, SixteenBitImagesAreScaledByTheirBitDepth) {
+  const cv::Mat grey = test::texturedImage(64, 48, 1);
+  cv::Mat twelve_bit;
+  grey.convertTo(twelve_bit, CV_16U, 16.0);  // values 320..3760: 12 bits
+  EXPECT_EQ(significantBits(twelve_bit), 12);
+  EXPECT_EQ(cv::norm(toGrey(twelve_bit, PixelEncoding::kMono16, 12), grey, cv::NORM_INF), 0.0);
+  // Read as 16-bit data the same frame has a sixteenth of its contrast: the old failure.
+  cv::Scalar mean, full_std, dim_std;
+  cv::meanStdDev(grey, mean, full_std);
+  cv::meanStdDev(toGrey(twelve_bit, PixelEncoding::kMono16, 16), mean, dim_std);
+  EXPECT_NEAR(dim_std[0], full_std[0] / 16.0, 0.5);
+  cv::Mat ten_bit, full;
+  grey.convertTo(ten_bit, CV_16U, 4.0);
+  grey.convertTo(full, CV_16U, 256.0);
+  EXPECT_EQ(significantBits(ten_bit), 10);
+  EXPECT_EQ(significantBits(full), 16);
+  EXPECT_EQ(significantBits(cv::Mat(4, 4, CV_16UC1, cv::Scalar(3))), 8);  // never below 8
+  EXPECT_THROW(significantBits(grey), std::invalid_argument);
+  EXPECT_THROW(toGrey(twelve_bit, PixelEncoding::kMono16, 17), std::invalid_argument);
+  // Values above the stated depth saturate.
+  EXPECT_EQ(toGrey(full, PixelEncoding::kMono16, 12).at<unsigned char>(0, 0), 255);
+}
+
 TEST(ImagePreparation, ColourChannelOrderMatters) {
   cv::Mat red(4, 4, CV_8UC3, cv::Scalar(0, 0, 255));  // BGR red
   const cv::Mat as_bgr = toGrey(red, PixelEncoding::kBgr8);

@@ -64,6 +64,23 @@ TEST(SlamParamsIo, LoopClosureSectionsAndPlaceRecognition) {
 TEST(SlamParamsIo, RefusesTyposAndBadValues) {
   expectFailure("trackr:\n  good_inliers: 3\n", "unknown section 'trackr'");
   expectFailure("tracker:\n  good_inlier: 3\n", "unknown key 'tracker.good_inlier'");
+  // Issue 17: a did-you-mean for typos, and the section that has a key put in the wrong one.
+  expectFailure("tracker:\n  good_inlier: 3\n",
+                "unknown key 'tracker.good_inlier' (did you mean 'tracker.good_inliers'?)");
+  expectFailure("trackr:\n  good_inliers: 3\n", "(did you mean 'tracker'?)");
+  expectFailure("tracker:\n  window_size: 3\n",
+                "unknown key 'tracker.window_size' (did you mean 'window_ba.window_size'?)");
+  expectFailure("place_recognition:\n  min_consistent_querys: 2\n",
+                "unknown key 'min_consistent_querys' (did you mean 'min_consistent_queries'?)");
+  expectFailure("place_recognition:\n  geometry:\n    min_inlier: 2\n",
+                "(did you mean 'geometry.min_inliers'?)");
+  expectFailure("? [a, b]\n: 3\n", "a section name is not text");
+  // Found by the fuzz test: a non-finite value passed range checks written as `x < bound`.
+  expectFailure("loop_verification:\n  ransac_threshold_px: .inf\n",
+                "'loop_verification.ransac_threshold_px' must be a finite number");
+  expectFailure("search:\n  min_ncc: .nan\n", "'search.min_ncc' must be a finite number");
+  expectFailure("place_recognition:\n  geometry:\n    ratio: .nan\n",
+                "key 'geometry.ratio' is not a finite number");
   expectFailure("tracker:\n  good_inliers: many\n", "tracker.good_inliers");
   expectFailure("tracker:\n  good_inliers: 5\n", "good_inliers");
   expectFailure("flow:\n  method: horn_schunck\n", "flow.method");

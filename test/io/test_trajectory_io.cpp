@@ -57,5 +57,24 @@ TEST(TrajectoryIo, MalformedFilesFailWithTheLine) {
   EXPECT_THROW(loadTrajectory("/nonexistent.tum"), std::runtime_error);
 }
 
+// Issue 17: outputs are sorted, repeated stamps dropped (the first pose kept) and counted.
+TEST(TrajectoryIo, SortsAndDropsRepeatedStamps) {
+  auto at = [](double t, double x) {
+    return StampedPose{t, geometry::SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(x, 0, 0))};
+  };
+  std::vector<StampedPose> poses = {at(3, 0), at(1, 1), at(2, 2), at(2, 3), at(1, 4)};
+  std::size_t reordered = 0;
+  EXPECT_EQ(sortAndDropRepeatedStamps(&poses, &reordered), 2u);
+  EXPECT_EQ(reordered, 2u);  // 3 -> 1 and 2 -> 1
+  ASSERT_EQ(poses.size(), 3u);
+  EXPECT_EQ(poses[0].timestamp, 1.0);
+  EXPECT_EQ(poses[0].T_world_cam.translation().x(), 1.0);  // the first pose of stamp 1
+  EXPECT_EQ(poses[1].T_world_cam.translation().x(), 2.0);
+  EXPECT_EQ(poses[2].timestamp, 3.0);
+  std::vector<StampedPose> sorted = {at(1, 0), at(2, 0)};
+  EXPECT_EQ(sortAndDropRepeatedStamps(&sorted), 0u);
+  EXPECT_EQ(sorted.size(), 2u);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::io

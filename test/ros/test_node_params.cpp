@@ -52,6 +52,15 @@ TEST(NodeParams, DefaultsWithoutParameters) {
   EXPECT_NE(describe(tracking).find("camera_optical_frame"), std::string::npos);
 }
 
+// Issue 17: a misspelt node parameter is named with the one it is close to (the shared helper).
+TEST(NodeParams, UnknownParametersGetADidYouMean) {
+  XmlRpcValue p = emptyStruct();
+  p["image_queue_sise"] = 3;
+  const TrackingNodeConfig c = trackingNodeConfig(p);
+  ASSERT_EQ(c.unknown.size(), 1u);
+  EXPECT_EQ(c.unknown[0], "~image_queue_sise (did you mean '~image_queue_size'?)");
+}
+
 TEST(NodeParams, ConfigFileThenOverrides) {
   XmlRpcValue p = emptyStruct();
   p["config"] =

@@ -23,10 +23,16 @@ std::string pixelEncodingName(PixelEncoding encoding);
 /// CV_8UC4 bgra8 (OpenCV's own channel order). Throws std::invalid_argument for other types.
 PixelEncoding encodingOfMat(const cv::Mat& image);
 
-/// An 8-bit grey copy of `image`, read as `encoding`. mono16 is scaled by 1/256 (full 16-bit
-/// range to 8 bits). Throws std::invalid_argument when the image is empty or its type does not
-/// match the encoding (a 3-channel image announced as mono8, a 16-bit image announced as bgr8).
-cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding);
+/// An 8-bit grey copy of `image`, read as `encoding`. mono16 holding `mono16_bits` bits of data
+/// (8..16; 12 for a 12-bit camera) is scaled by 1 / 2^(bits - 8), larger values saturate.
+/// Throws std::invalid_argument when the image is empty or its type does not match the encoding
+/// (a 3-channel image announced as mono8, a 16-bit image announced as bgr8), or for bits
+/// outside [8, 16].
+cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding, int mono16_bits = 16);
+/// The bits the values of a 16-bit image use: 8..16 (16-bit PNGs from a 12-bit camera hold
+/// values below 4096: 12, or fewer for a dark frame). Throws std::invalid_argument for another
+/// type.
+int significantBits(const cv::Mat& mono16);
 
 /// A grey image and its pyramid: level 0 is the image itself, each further level halves it
 /// (cv::pyrDown, Gaussian 5x5). Levels stop early when the image gets smaller than 32 pixels.

@@ -32,8 +32,10 @@ struct CameraCalibration {
   std::vector<double> distortion;  ///< Coefficients in the order of the model (above).
 
   /// Throws std::invalid_argument with the reason when the calibration cannot be used: a
-  /// non-positive or non-finite focal length, a principal point far off the image, a
-  /// non-positive image size, the wrong number of coefficients or a NaN coefficient.
+  /// non-positive or non-finite focal length or one above 100x the image size, a principal
+  /// point far off the image (more than one image size outside it), a non-positive image size
+  /// or one above 100000, the wrong number of coefficients or a non-finite coefficient or one
+  /// above 1000 in magnitude.
   void validate() const;
   /// One line for logs: "plumb_bob 640x480 fx=.. fy=.. cx=.. cy=.. d=[..]".
   std::string describe() const;

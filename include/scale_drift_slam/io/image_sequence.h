@@ -25,6 +25,8 @@ struct SequenceFrame {
   /// The pixel encoding when the source states it (bags: "rgb8", "mono16", ...); empty: infer
   /// from the image type (8-bit 1/3/4 channels = mono8/bgr8/bgra8, 16-bit = mono16).
   std::string encoding;
+  /// Why `image` is empty, when the reader knows (a truncated message, a size mismatch).
+  std::string problem;
 };
 
 /// A sequence of frames, read lazily. Not thread-safe.
@@ -38,20 +40,46 @@ class ImageSequence {
   /// The calibration stored with the sequence, when it has one.
   virtual std::optional<geometry::CameraCalibration> calibration() const = 0;
   virtual std::string describe() const = 0;
+  /// What is odd about the sequence but was recovered (stamps out of order, duplicated, all
+  /// equal), one line each, for the log.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
+
+/// The frames a dataset's list file names, sorted by stamp, and what was odd about it.
+struct FrameList {
+  std::vector<std::pair<double, std::string>> frames;  ///< (seconds, image path)
+  std::vector<std::string> warnings;
+};
+
+enum class ListFormat {
+  kTum,         ///< rgb.txt: "<seconds> <file>" lines, '#' comments.
+  kEuroc,       ///< data.csv: "<nanoseconds>,<file>" lines, '#' comments.
+  kKittiTimes,  ///< times.txt: "<seconds>" lines; line i is the image "%06d.png" of number i.
+};
+
+/// Parses a list file's text; image paths are relative to `image_dir`. A malformed line or a
+/// non-finite stamp (nan, inf) is an error naming the line. Stamps going back in time are
+/// sorted (stable), frames with a stamp equal to an earlier one are dropped (the first in the
+/// file is kept); both are reported in `warnings` with counts and the first line, as are stamps
+/// that are all equal. Throws std::runtime_error naming `origin`, also for an empty list.
+FrameList parseFrameList(const std::string& text, ListFormat format, const std::string& origin,
+                         const std::string& image_dir);
 
 /// A list of (timestamp, image path) read from disk one by one; the common case of all layouts.
 class FileImageSequence : public ImageSequence {
  public:
   FileImageSequence(std::vector<std::pair<double, std::string>> frames,
-                    std::optional<geometry::CameraCalibration> calibration, std::string kind);
+                    std::optional<geometry::CameraCalibration> calibration, std::string kind,
+                    std::vector<std::string> warnings = {});
   std::optional<SequenceFrame> next() override;
   std::size_t size() const override { return frames_.size(); }
   std::optional<geometry::CameraCalibration> calibration() const override { return calibration_; }
   std::string describe() const override;
+  std::vector<std::string> warnings() const override { return warnings_; }
 
  private:
   std::vector<std::pair<double, std::string>> frames_;
+  std::vector<std::string> warnings_;
   std::optional<geometry::CameraCalibration> calibration_;
   std::string kind_;
   std::size_t index_ = 0;

@@ -18,6 +18,11 @@ struct StampedPose {
 /// Reads a TUM file (or an EuRoC csv, recognised by its commas). Throws std::runtime_error with
 /// the file, the line number and the problem for a missing file or a malformed line.
 std::vector<StampedPose> loadTrajectory(const std::string& path);
+/// Sorts poses by stamp (stable) and drops the later poses of a stamp already present. Returns
+/// how many were dropped (stamps repeated); `reordered` (optional) gets how many stamps went
+/// back in time before sorting.
+std::size_t sortAndDropRepeatedStamps(std::vector<StampedPose>* poses,
+                                      std::size_t* reordered = nullptr);
 /// Writes a TUM file (full double precision). Throws std::runtime_error when it cannot.
 void saveTumTrajectory(const std::string& path, const std::vector<StampedPose>& poses,
                        const std::string& header_comment = "");

@@ -83,6 +83,11 @@ class SlamSystem {
   int relocalisations() const;
   /// Young lost maps the tracker discarded to initialise again.
   int mapRestarts() const { return map_restarts_; }
+  /// The trajectories of the discarded maps (map 0, 1, ...), as corrected until each was
+  /// discarded; trajectory() is the current map's (number mapRestarts()).
+  const std::vector<map::CorrectedTrajectory>& discardedTrajectories() const {
+    return discarded_trajectories_;
+  }
   /// Log lines of the background threads (loops found or refused, relocalisation answers) since
   /// the last call.
   std::vector<std::string> takeLog();
@@ -109,6 +114,7 @@ class SlamSystem {
   MapperEndpoint mapper_;           ///< The mapping thread's.
   LoopCloserEndpoint loop_closer_;  ///< The loop thread's.
   map::CorrectedTrajectory trajectory_;
+  std::vector<map::CorrectedTrajectory> discarded_trajectories_;
   std::uint32_t session_ = 1;  ///< The tracker's; a new one at each map restart.
   common::MessageQueue<MapperInput> mapper_inbox_;
   common::MessageQueue<LoopInput> loop_inbox_;

@@ -34,7 +34,10 @@ struct TrackerParams {
                               ///< contrast stretch) are unusable.
   /// Frames whose 1st-99th percentile grey range is below this are stretched towards it...
   double contrast_target_range = 128.0;
-  double max_contrast_gain = 4.0;   ///< ...by at most this gain (1: never stretched).
+  double max_contrast_gain = 4.0;  ///< ...by at most this gain (1: never stretched).
+  /// Bits used by 16-bit (mono16) images (8..16): a 12-bit camera's frames scaled by 1/16 would
+  /// use 1/16 of the grey range. 0: the bits of the largest value seen so far.
+  int mono16_bit_depth = 0;
   int good_inliers = 50;            ///< Inliers for "good" tracking (fewer: weak).
   int min_inliers = 15;             ///< Below: lost.
   int local_recent_keyframes = 6;   ///< Local map: points of the newest keyframes...
@@ -125,6 +128,9 @@ class Tracker {
   bool localizationOnly() const { return localization_only_; }
 
   TrackingState state() const { return state_; }
+  /// The bit depth 16-bit frames are read with (tracker.mono16_bit_depth, or measured); 0 before
+  /// the first 16-bit frame.
+  int mono16BitDepth() const { return mono16_bits_; }
   const TrackingMap& trackingMap() const { return map_; }
   std::size_t numCandidates() const { return candidates_.size(); }
 
@@ -191,6 +197,7 @@ class Tracker {
   map::KeyframeId next_keyframe_id_ = 0;
   map::PointId next_point_id_ = 0;
   int rejected_in_row_ = 0;
+  int mono16_bits_ = 0;
   int lost_in_row_ = 0;
   int tracked_at_keyframe_ = 0;  ///< Map points seen in the last keyframe (keyframe rule).
   std::optional<geometry::Sim3> pending_loop_correction_;  ///< Reported with the next frame.
