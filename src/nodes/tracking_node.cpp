@@ -165,12 +165,16 @@ class TrackingNode {
     last_stamp_ = header.stamp;
     applyReceived();
     tracking::FrameResult result;
+    const int mono16_bits = tracker_->mono16BitDepth();
     try {
       result = tracker_->processFrame(header.stamp.toSec(), image.image, image.encoding);
     } catch (const std::exception& e) {  // the core reports bad frames; anything else is a bug
       ROS_ERROR_THROTTLE(5, "tracking failed on the frame at %.6f s: %s", header.stamp.toSec(),
                          e.what());
       return;
+    }
+    if (tracker_->mono16BitDepth() != mono16_bits) {
+      ROS_INFO("%s", tracker_->describeMono16BitDepth().c_str());
     }
     if (result.map_restarted) {
       ROS_WARN("%s", result.message.c_str());

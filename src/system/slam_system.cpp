@@ -61,14 +61,7 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
   drainInbox();
   const int mono16_bits = tracker_.mono16BitDepth();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
-  if (tracker_.mono16BitDepth() != mono16_bits) {
-    log("16-bit images are read as " + std::to_string(tracker_.mono16BitDepth()) +
-        "-bit data (scaled by 1/" + std::to_string(1 << (tracker_.mono16BitDepth() - 8)) +
-        (params_.tracker.mono16_bit_depth > 0 ? ", tracker.mono16_bit_depth)"
-                                              : ", from the largest value so far; set "
-                                                "tracker.mono16_bit_depth or --bit-depth to fix "
-                                                "it)"));
-  }
+  if (tracker_.mono16BitDepth() != mono16_bits) log(tracker_.describeMono16BitDepth());
   if (result.map_restarted) {
     // A new session: its first keyframe starts a new map at the mapper and the loop closer.
     tracker_inbox_.startSession(++session_);

@@ -383,4 +383,13 @@ double Tracker::sceneDepth(const geometry::SE3& T_cam_world) const {
   return depths.empty() ? last_scene_depth_ : common::upperMedian(std::move(depths));
 }
 
+std::string Tracker::describeMono16BitDepth() const {
+  return "16-bit images are read as " + std::to_string(mono16_bits_) + "-bit data (scaled by 1/" +
+         std::to_string(1 << (mono16_bits_ - 8)) +
+         (params_.mono16_bit_depth > 0
+              ? ", tracker.mono16_bit_depth)"
+              : ", from the largest value so far; set tracker.mono16_bit_depth or --bit-depth to "
+                "fix it)");
+}
+
 }  // namespace scale_drift_slam::tracking

@@ -129,6 +129,10 @@ def headless(words):
             w = 'rviz:=false'
         elif key == 'bag':
             w = 'bag:=' + bag
+        elif key == 'master_uri':  # another machine's master: this test's, on this host
+            w = 'master_uri:=' + os.environ['ROS_MASTER_URI']
+        elif key == 'address':
+            w = 'address:=127.0.0.1'
         elif key == 'calibration_file' and not os.path.exists(value):
             w = 'calibration_file:=' + os.path.join(root, 'config', 'euroc_cam0.yaml')
         if w != words[len(result)]:
@@ -145,6 +149,11 @@ def run_roslaunch(where, words, services):
     log = open(os.path.join(out, 'roslaunch_%s.log' % words[2]), 'w')
     process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)
     expected = NODES if 'loop_closure:=false' not in words else NODES[:2]
+    if words[2] == 'robot.launch':  # the two-machine split (doc/ros.md, "Running on two machines")
+        expected = ['tracking_node']
+    elif words[2] == 'base_station.launch':
+        expected = [n for n in NODES[1:] if n != 'loop_closure_node' or
+                    'loop_closure:=false' not in words]
     up = wait_for_nodes(expected, process, 60)
     time.sleep(8.0 if services else 4.0)
     for service_where, service_words in services:
@@ -231,6 +240,21 @@ try:
                   'cmake/tests.cmake), not again here' % (' '.join(words), words[2]))
         elif first in TOOLS:
             run_tool_help(where, first)
+        elif first == 'export' and all(
+                w.startswith(('ROS_MASTER_URI=', 'ROS_IP=')) for w in words[1:]):
+            not_run(where, words, "one machine's environment; the two-machine tests (ctest "
+                    "twohosts_*) set it per network namespace, and the launch commands run here "
+                    "with this test's master")
+        elif words == ['roscore', '&']:
+            not_run(where, words, 'the master; this test runs its own (roscore on a free port)')
+        elif 'ctest -R twohosts' in ' '.join(words):
+            registered = 'twohosts' in open(os.path.join(root, 'cmake', 'tests.cmake')).read()
+            check(where, registered, '`%s`: the twohosts tests are registered in '
+                  'cmake/tests.cmake and run by ctest' % ' '.join(words))
+        elif 'test/twohosts/two_hosts.sh' in words:
+            script = os.path.join(root, 'test', 'twohosts', 'two_hosts.sh')
+            check(where, os.path.isfile(script), '`%s`: a ~1 min experiment with a 15 s outage; '
+                  'ctest twohosts_outage runs the same script with 5 s' % ' '.join(words))
         else:
             check(where, False, '`%s`: a documented command this test does not know: teach it'
                   % ' '.join(words))

@@ -131,6 +131,8 @@ class Tracker {
   /// The bit depth 16-bit frames are read with (tracker.mono16_bit_depth, or measured); 0 before
   /// the first 16-bit frame.
   int mono16BitDepth() const { return mono16_bits_; }
+  /// The log line for a new mono16BitDepth(): how 16-bit frames are scaled and where it came from.
+  std::string describeMono16BitDepth() const;
   const TrackingMap& trackingMap() const { return map_; }
   std::size_t numCandidates() const { return candidates_.size(); }
 
