@@ -212,7 +212,8 @@ class TrackingNode {
         result, *tracker_, inbox_.address(tracker_->trackingMap().version()), header.stamp,
         params_.frames.optical));
     if (result.has_pose)
-      poses_.publish(header.stamp, result.T_cam_world, result.reference_keyframe);
+      poses_.publish(header.stamp, result.T_cam_world, result.reference_keyframe,
+                     result.pose_information);
     if (debug_pub_.getNumSubscribers() > 0 && !result.rejected) {
       debug_pub_.publish(
           ros_conversions::debugImageMsg(image, result, header, params_.frames.optical));
