@@ -1,5 +1,6 @@
 #include "scale_drift_slam/ros/pose_publisher.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -29,10 +30,13 @@ void copyCovariance(const Matrix6d& covariance, boost::array<double, 36>* out) {
 
 std::string describePose(const geometry::SE3& T) {
   const Eigen::Vector3d t = T.translation();
-  const Eigen::Vector3d ypr = T.rotationMatrix().eulerAngles(2, 1, 0);
+  const Eigen::Matrix3d R = T.rotationMatrix();  // R = Rz(yaw) Ry(pitch) Rx(roll)
+  const double roll = std::atan2(R(2, 1), R(2, 2));
+  const double pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
   char text[160];
   std::snprintf(text, sizeof(text), "xyz [%.4f, %.4f, %.4f] rpy [%.4f, %.4f, %.4f]", t.x(), t.y(),
-                t.z(), ypr(2), ypr(1), ypr(0));
+                t.z(), roll, pitch, yaw);
   return text;
 }
 
