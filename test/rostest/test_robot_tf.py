@@ -194,7 +194,8 @@ class RobotTf(unittest.TestCase):
         return worst, checked
 
     def check_odometry(self, ns, parent, stamps=None):
-        known = 0
+        """Odometry against tf, its covariance; the known ones' position sigmas."""
+        known = []
         for msg in self.odometry[ns]:
             if stamps is not None and msg.header.stamp not in stamps:
                 continue
@@ -209,11 +210,11 @@ class RobotTf(unittest.TestCase):
             self.assertLess(np.abs(covariance - covariance.T).max(), 1e-9 * np.abs(covariance).max())
             self.assertGreater(np.linalg.eigvalsh(covariance).min(), 0.0)
             if covariance.max() < 1e3:
-                known += 1
+                known.append(math.sqrt(covariance[:3, :3].trace()))
                 # The base's position: millimetres to centimetres of a scene of metres.
-                self.assertLess(math.sqrt(covariance[:3, :3].trace()), 0.1, covariance)
-        self.assertGreaterEqual(known, 0.9 * len(self.odometry[ns]))
-        self.assertGreater(known, 100)
+                self.assertLess(known[-1], 0.1, covariance)
+        self.assertGreaterEqual(len(known), 0.9 * len(self.odometry[ns]))
+        self.assertGreater(len(known), 100)
         return known
 
     def check_twist(self, ns):
@@ -277,14 +278,23 @@ class RobotTf(unittest.TestCase):
         drift = difference(
             from_transform(self.buffer.lookup_transform('wheel_map', 'wheel_odom', first).transform),
             from_transform(self.buffer.lookup_transform('wheel_map', 'wheel_odom', last).transform))
+        slam_length = sum(np.linalg.norm(b[1][:3, 3] - a[1][:3, 3]) for a, b in zip(urdf, urdf[1:]))
+        rows = [[float(x) for x in l.split()] for l in open(os.path.join(folder, 'groundtruth.txt'))
+                if l.strip() and l[0] != '#']
+        true_length = sum(np.linalg.norm(np.array(b[1:4]) - np.array(a[1:4]))
+                          for a, b in zip(rows, rows[1:]))
         print('robot_tf: urdf %d frames tracked, camera in map through map->odom->base->camera '
               'within %.2g units / %.2g rad of the tracker (%d checked), %d odometry messages '
-              'with a known covariance; wheel %d frames tracked, map->odom at %d, camera in map '
-              'through the robot\'s odometry within %.2g units / %.2g rad (%d checked), %d known '
-              'covariances; map->odom moved %.2f units / %.3f rad over the run (map units are '
-              'not metres)' % (len(urdf), urdf_worst[0], urdf_worst[1], urdf_checked, urdf_known,
-                               len(wheel), len(map_odom_stamps), wheel_worst[0], wheel_worst[1],
-                               wheel_checked, wheel_known, drift[0], drift[1]))
+              'with a known covariance, position sigma median %.4f units (%.4f-%.4f); wheel %d '
+              'frames tracked, map->odom at %d, camera in map through the robot\'s odometry '
+              'within %.2g units / %.2g rad (%d checked), %d known covariances; map->odom moved '
+              '%.2f units / %.3f rad over the run; camera path %.2f map units for %.2f m (%.3f m '
+              'per map unit)' % (
+                  len(urdf), urdf_worst[0], urdf_worst[1], urdf_checked, len(urdf_known),
+                  np.median(urdf_known), min(urdf_known), max(urdf_known), len(wheel),
+                  len(map_odom_stamps), wheel_worst[0], wheel_worst[1], wheel_checked,
+                  len(wheel_known), drift[0], drift[1], slam_length, true_length,
+                  true_length / slam_length))
         for ns in ('urdf', 'wheel'):
             self.assertIsNotNone(sds.node_pid('/%s/tracking_node' % ns))
         self.assertFalse(self.rosout.find('tracking_node', level=Log.ERROR))
