@@ -181,8 +181,12 @@ void PosePublisher::publishOdometry(const ros::Time& stamp, const geometry::SE3&
     odometry.twist.twist.angular.x = twist.angular.x();
     odometry.twist.twist.angular.y = twist.angular.y();
     odometry.twist.twist.angular.z = twist.angular.z();
-    copyCovariance(twistCovariance(previous_->Sigma_child, Sigma_child, dt),
-                   &odometry.twist.covariance);
+    // Sigma_child is in map units; the twist in odom units (1/s of them after a correction).
+    Matrix6d twist_covariance = twistCovariance(previous_->Sigma_child, Sigma_child, dt);
+    const double odom_scale = 1.0 / odom_.correction().scale();
+    twist_covariance.topRows<3>() *= odom_scale;
+    twist_covariance.leftCols<3>() *= odom_scale;
+    copyCovariance(twist_covariance, &odometry.twist.covariance);
   } else {
     copyCovariance(Matrix6d::Identity() * kUnknownVariance, &odometry.twist.covariance);
   }
