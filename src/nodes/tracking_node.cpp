@@ -1,7 +1,8 @@
 // tracking_node: the front-end as a ROS node (doc/ros.md). Camera images (image_transport raw,
 // or compressed) and a calibration (CameraInfo or ~calibration_file) go into the core's
-// tracking::Tracker; out come the pose on tf (map -> odom -> camera body, static body ->
-// optical), nav_msgs/Odometry and Path (corrected by loop closures), TrackingStatus, a debug
+// tracking::Tracker; out come the pose on tf (map -> odom -> base -> camera body, static body ->
+// optical; doc/ros.md "tf on a robot"), nav_msgs/Odometry (covariance, twist) and Path
+// (corrected by loop closures), TrackingStatus, a debug
 // image, every new Keyframe and, when lost, RelocalisationRequests. MapUpdates (mapping node) and
 // RelocalisationAnswers (loop-closure node) arrive on their own callback queue and thread and wait
 // in a common::MessageQueue that the image callback drains before each frame, as
