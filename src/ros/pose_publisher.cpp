@@ -58,7 +58,9 @@ PosePublisher::PosePublisher(ros::NodeHandle& nh, const TrackingNodeParams& para
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_);
   }
   if (!params_.frames.base.empty()) resolveMount();
-  if (params_.publish_tf && !params_.publish_odom_tf) {
+  if (!params_.publish_tf || params_.publish_odom_tf) {
+    tf_listener_.reset();  // the mount is read once: no need to follow /tf any more
+  } else {
     ROS_INFO("publish_odom_tf is off: publishing only %s -> %s, through the robot's %s -> %s",
              params_.frames.map.c_str(), params_.frames.odom.c_str(), params_.frames.odom.c_str(),
              child_.c_str());
