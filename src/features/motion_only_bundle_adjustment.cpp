@@ -1,5 +1,6 @@
 #include "scale_drift_slam/features/motion_only_bundle_adjustment.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <deque>
@@ -7,6 +8,7 @@
 
 #include <ceres/ceres.h>
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include "scale_drift_slam/common/stopwatch.h"
 
@@ -155,6 +157,24 @@ geometry::SE3 ceresLm(const MotionOnlyInput& input, const MotionOnlyBundleAdjust
 
 }  // namespace
 
+std::optional<Eigen::Matrix<double, 6, 6>> poseCovariance(
+    const Eigen::Matrix<double, 6, 6>& information, double pixel_sigma_px) {
+  if (!information.allFinite() || !(pixel_sigma_px > 0.0) || !std::isfinite(pixel_sigma_px)) {
+    return std::nullopt;
+  }
+  // Eigenvalues, not a Cholesky test: a near-singular information (points on one ray) passes
+  // Cholesky in floating point but gives a meaningless inverse.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(information);
+  if (eigen.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Matrix<double, 6, 1> values = eigen.eigenvalues();
+  if (!(values(0) > 1e-12 * std::max(values(5), 1e-300))) return std::nullopt;
+  const Eigen::Matrix<double, 6, 6> V = eigen.eigenvectors();
+  Eigen::Matrix<double, 6, 6> covariance =
+      pixel_sigma_px * pixel_sigma_px * V * values.cwiseInverse().asDiagonal() * V.transpose();
+  covariance = 0.5 * (covariance + covariance.transpose()).eval();
+  return covariance;
+}
+
 MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
                                                  const MotionOnlyBundleAdjustmentParams& params) {
   const common::Stopwatch timer;
@@ -182,13 +202,15 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   for (std::size_t i = 0; i < input.observations.size(); ++i) {
     const PoseObservation& o = input.observations[i];
     Eigen::Vector2d r0 = Eigen::Vector2d::Zero(), r1 = Eigen::Vector2d::Zero();
+    Eigen::Matrix<double, 2, 6> J;
     const bool ok0 = features::reprojectionResidual(input.T_cam_world_guess, o.p_world, o.xy,
                                                     input.focal_length_px, &r0, nullptr, nullptr);
     const bool ok1 = features::reprojectionResidual(result.T_cam_world, o.p_world, o.xy,
-                                                    input.focal_length_px, &r1, nullptr, nullptr);
+                                                    input.focal_length_px, &r1, &J, nullptr);
     result.inlier[i] = ok1 && r1.norm() < params.inlier_threshold_px;
     if (!result.inlier[i]) continue;
     ++stats.num_inliers;
+    result.inlier_information.noalias() += J.transpose() * J;
     initial_sq += ok0 ? r0.squaredNorm() : kBehindErrorPx * kBehindErrorPx;
     final_sq += r1.squaredNorm();
   }

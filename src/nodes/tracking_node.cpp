@@ -1,7 +1,8 @@
 // tracking_node: the front-end as a ROS node (doc/ros.md). Camera images (image_transport raw,
 // or compressed) and a calibration (CameraInfo or ~calibration_file) go into the core's
-// tracking::Tracker; out come the pose on tf (map -> odom -> camera body, static body ->
-// optical), nav_msgs/Odometry and Path (corrected by loop closures), TrackingStatus, a debug
+// tracking::Tracker; out come the pose on tf (map -> odom -> base -> camera body, static body ->
+// optical; doc/ros.md "tf on a robot"), nav_msgs/Odometry (covariance, twist) and Path
+// (corrected by loop closures), TrackingStatus, a debug
 // image, every new Keyframe and, when lost, RelocalisationRequests. MapUpdates (mapping node) and
 // RelocalisationAnswers (loop-closure node) arrive on their own callback queue and thread and wait
 // in a common::MessageQueue that the image callback drains before each frame, as
@@ -218,7 +219,8 @@ class TrackingNode {
         result, *tracker_, inbox_.address(tracker_->trackingMap().version()), header.stamp,
         params_.frames.optical));
     if (result.has_pose)
-      poses_.publish(header.stamp, result.T_cam_world, result.reference_keyframe);
+      poses_.publish(header.stamp, result.T_cam_world, result.reference_keyframe,
+                     result.pose_information);
     if (debug_pub_.getNumSubscribers() > 0 && !result.rejected) {
       debug_pub_.publish(
           ros_conversions::debugImageMsg(image, result, header, params_.frames.optical));

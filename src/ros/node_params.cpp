@@ -59,6 +59,25 @@ class Reader {
       *value = static_cast<bool>(*v);
     }
   }
+  /// A list of numbers (ints taken as doubles) of exactly value->size() entries.
+  void read(const std::string& key, std::vector<double>* value) {
+    if (XmlRpcValue* v = find(key, XmlRpcValue::TypeArray, "a list")) {
+      if (v->size() != static_cast<int>(value->size())) {
+        fail(key, "must have " + std::to_string(value->size()) + " numbers, got " +
+                      std::to_string(v->size()));
+      }
+      for (int i = 0; i < v->size(); ++i) {
+        XmlRpcValue& x = (*v)[i];
+        if (x.getType() == XmlRpcValue::TypeDouble) {
+          (*value)[i] = static_cast<double>(x);
+        } else if (x.getType() == XmlRpcValue::TypeInt) {
+          (*value)[i] = static_cast<int>(x);
+        } else {
+          fail(key, "must be a list of numbers, got " + kindName(x.getType()));
+        }
+      }
+    }
+  }
   void read(const std::string& key, double* value) {
     known_.insert(key);
     if (!params_.hasMember(key)) return;
@@ -168,6 +187,7 @@ void readFrames(Reader& reader, FrameNames* frames) {
   reader.read("odom_frame", &frames->odom);
   reader.read("camera_frame", &frames->camera);
   reader.read("optical_frame", &frames->optical);
+  reader.read("base_frame", &frames->base);
 }
 
 }  // namespace
@@ -180,11 +200,22 @@ void TrackingNodeParams::validate() const {
   check(path_max_poses >= 1, "path_max_poses", "must be >= 1");
   check(std::isfinite(time_jump_restart_s) && time_jump_restart_s >= 0.0, "time_jump_restart_s",
         "must be >= 0");
-  const std::vector<std::pair<std::string, std::string>> names = {
-      {"map_frame", frames.map},
-      {"odom_frame", frames.odom},
-      {"camera_frame", frames.camera},
-      {"optical_frame", frames.optical}};
+  check(std::isfinite(camera_mount_wait_s) && camera_mount_wait_s >= 0.0, "camera_mount_wait_s",
+        "must be >= 0");
+  check(std::isfinite(odom_tf_timeout_s) && odom_tf_timeout_s >= 0.0, "odom_tf_timeout_s",
+        "must be >= 0");
+  check(std::isfinite(pose_pixel_sigma_px) && pose_pixel_sigma_px > 0.0, "pose_pixel_sigma_px",
+        "must be > 0");
+  check(camera_mount.size() == 6, "camera_mount", "must be [x, y, z, roll, pitch, yaw]");
+  for (const double x : camera_mount)
+    check(std::isfinite(x), "camera_mount", "must be finite numbers");
+  std::vector<std::pair<std::string, std::string>> names = {{"map_frame", frames.map},
+                                                            {"odom_frame", frames.odom},
+                                                            {"camera_frame", frames.camera},
+                                                            {"optical_frame", frames.optical}};
+  check(frames.base.empty() || frames.base[0] != '/', "base_frame",
+        "must be a frame name without '/' (or empty: no base)");
+  if (!frames.base.empty()) names.push_back({"base_frame", frames.base});
   std::set<std::string> distinct;
   for (const auto& [key, name] : names) {
     check(!name.empty() && name[0] != '/', key, "must be a non-empty frame name without '/'");
@@ -249,6 +280,12 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   readFrames(reader, &p.frames);
   reader.read("map_z_up", &p.map_z_up);
   reader.read("publish_optical_transform", &p.publish_optical_transform);
+  reader.read("publish_tf", &p.publish_tf);
+  reader.read("publish_odom_tf", &p.publish_odom_tf);
+  reader.read("camera_mount", &p.camera_mount);
+  reader.read("camera_mount_wait_s", &p.camera_mount_wait_s);
+  reader.read("odom_tf_timeout_s", &p.odom_tf_timeout_s);
+  reader.read("pose_pixel_sigma_px", &p.pose_pixel_sigma_px);
   reader.read("path_publish_every", &p.path_publish_every);
   reader.read("path_max_poses", &p.path_max_poses);
   reader.read("time_jump_restart_s", &p.time_jump_restart_s);
@@ -313,8 +350,16 @@ std::string describe(const TrackingNodeConfig& c) {
   out << "transport: " << p.transport << "\nimage_queue_size: " << p.image_queue_size
       << "\nkeyframe_publish_queue_size: " << p.keyframe_publish_queue_size << "\nframes: map "
       << p.frames.map << ", odom " << p.frames.odom << ", camera " << p.frames.camera
-      << ", optical " << p.frames.optical << "\nmap_z_up: " << p.map_z_up
+      << ", optical " << p.frames.optical << ", base "
+      << (p.frames.base.empty() ? "(none)" : p.frames.base) << "\nmap_z_up: " << p.map_z_up
       << "\npublish_optical_transform: " << p.publish_optical_transform
+      << "\npublish_tf: " << p.publish_tf << "\npublish_odom_tf: " << p.publish_odom_tf
+      << "\ncamera_mount: [" << p.camera_mount[0] << ", " << p.camera_mount[1] << ", "
+      << p.camera_mount[2] << ", " << p.camera_mount[3] << ", " << p.camera_mount[4] << ", "
+      << p.camera_mount[5] << "] (used only when tf has none)"
+      << "\ncamera_mount_wait_s: " << p.camera_mount_wait_s
+      << "\nodom_tf_timeout_s: " << p.odom_tf_timeout_s
+      << "\npose_pixel_sigma_px: " << p.pose_pixel_sigma_px
       << "\npath_publish_every: " << p.path_publish_every
       << "\npath_max_poses: " << p.path_max_poses
       << "\ntime_jump_restart_s: " << p.time_jump_restart_s << "\n# SLAM parameters\n"

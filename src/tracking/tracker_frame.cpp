@@ -165,6 +165,7 @@ void Tracker::researchMissed(const geometry::SE3& T_cam_world, const std::vector
   *inliers = std::move(more_inliers);
   result->num_found = counts.num_found;
   result->num_inliers = counts.num_inliers;
+  result->pose_information = counts.pose_information;
 }
 
 void Tracker::recordSearches(const std::vector<map::PointId>& ids,
@@ -200,6 +201,7 @@ geometry::SE3 Tracker::solvePose(const geometry::SE3& T_guess, const std::vector
     if (solved.inlier[k]) inliers->push_back({ids[used[k]], match.px, match.xy});
   }
   result->num_inliers = static_cast<int>(inliers->size());
+  result->pose_information = solved.inlier_information;
   return solved.T_cam_world;
 }
 

@@ -189,5 +189,46 @@ TEST(NodeParams, BadValuesNameTheParameter) {
   EXPECT_NE(mapping_error(p).find("~marker_scale"), std::string::npos) << mapping_error(p);
 }
 
+TEST(NodeParams, RobotFrames) {
+  const TrackingNodeParams defaults = trackingNodeConfig(emptyStruct()).node;
+  EXPECT_EQ(defaults.frames.base, "base_link");
+  EXPECT_TRUE(defaults.publish_tf);
+  EXPECT_TRUE(defaults.publish_odom_tf);
+  EXPECT_EQ(defaults.camera_mount, std::vector<double>(6, 0.0));
+  XmlRpcValue p = emptyStruct();
+  p["base_frame"] = std::string("");
+  p["publish_odom_tf"] = false;
+  p["camera_mount"][0] = 0.2;
+  p["camera_mount"][1] = 0;
+  p["camera_mount"][2] = 0.5;
+  p["camera_mount"][3] = 0;
+  p["camera_mount"][4] = 0.3;
+  p["camera_mount"][5] = -1;
+  const TrackingNodeConfig config = trackingNodeConfig(p);
+  EXPECT_EQ(config.node.frames.base, "");
+  EXPECT_FALSE(config.node.publish_odom_tf);
+  EXPECT_EQ(config.node.camera_mount, (std::vector<double>{0.2, 0, 0.5, 0, 0.3, -1}));
+  EXPECT_TRUE(config.unknown.empty());
+
+  const auto error = [](XmlRpcValue q) { return errorOf([&] { trackingNodeConfig(q); }); };
+  XmlRpcValue short_mount = emptyStruct();
+  short_mount["camera_mount"][0] = 1.0;
+  EXPECT_NE(error(short_mount).find("~camera_mount: must have 6 numbers, got 1"), std::string::npos)
+      << error(short_mount);
+  XmlRpcValue text_mount = p;
+  text_mount["camera_mount"][2] = std::string("up");
+  EXPECT_NE(error(text_mount).find("~camera_mount: must be a list of numbers"), std::string::npos)
+      << error(text_mount);
+  XmlRpcValue same = emptyStruct();
+  same["base_frame"] = std::string("camera_link");
+  EXPECT_NE(error(same).find("used for two frames"), std::string::npos) << error(same);
+  XmlRpcValue sigma = emptyStruct();
+  sigma["pose_pixel_sigma_px"] = 0.0;
+  EXPECT_NE(error(sigma).find("~pose_pixel_sigma_px: must be > 0"), std::string::npos);
+  XmlRpcValue wait = emptyStruct();
+  wait["odom_tf_timeout_s"] = -1.0;
+  EXPECT_NE(error(wait).find("~odom_tf_timeout_s"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::ros_conversions

@@ -38,7 +38,7 @@ class MappingRestart(unittest.TestCase):
                          lambda m: clouds.append((time.time(), m.width * m.height)), queue_size=100)
 
         def on_tf(msg):
-            if any(t.child_frame_id == 'camera_link' for t in msg.transforms):
+            if any(t.child_frame_id == 'base_link' for t in msg.transforms):
                 tf_wall.append(time.time())
         rospy.Subscriber('/tf', TFMessage, on_tf, queue_size=1000)
         rospy.wait_for_service('/mapping_node/save_trajectory', timeout=30)

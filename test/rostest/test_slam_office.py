@@ -43,7 +43,7 @@ class SlamOnBag(unittest.TestCase):
 
         def on_tf(msg):
             for t in msg.transforms:
-                if t.header.frame_id == 'odom' and t.child_frame_id == 'camera_link':
+                if t.header.frame_id == 'odom' and t.child_frame_id == 'base_link':
                     tf_stamps.append(t.header.stamp.to_sec())
                     tf_wall.append(time.time())
         rospy.Subscriber('/tf', TFMessage, on_tf, queue_size=1000)

@@ -8,6 +8,7 @@
 // on the 6 parameters, kept to measure against: its per-problem set-up costs ~10x more,
 // doc/benchmarks.md). Pure function of its input; safe to call from any thread.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,7 +55,19 @@ struct MotionOnlyResult {
   /// sum w_k J_k^T J_k at the solution (pixel residuals, left-update tangent (omega, upsilon)):
   /// divided by the pixel noise variance it is the inverse covariance of the pose.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  /// sum J_k^T J_k over the inliers only, unweighted (pixel residuals, the same tangent): the
+  /// information of the pose per unit pixel noise (poseCovariance).
+  Eigen::Matrix<double, 6, 6> inlier_information = Eigen::Matrix<double, 6, 6>::Zero();
 };
+
+/// The covariance of a solved pose: sigma_px^2 (J^T J)^-1 for the information J^T J of pixel
+/// residuals (MotionOnlyResult::inlier_information) and the pixel noise sigma_px (one standard
+/// deviation per image coordinate). Its tangent is the left update T_cam_world <- exp(delta)
+/// T_cam_world, delta = (omega [rad], upsilon [map units]): a perturbation in the camera
+/// (optical) frame. The map's scale is unknown, so the translation part is in map units^2.
+/// Empty when the information is singular (fewer than 3 points, or degenerate) or not finite.
+std::optional<Eigen::Matrix<double, 6, 6>> poseCovariance(
+    const Eigen::Matrix<double, 6, 6>& information, double pixel_sigma_px);
 
 /// Needs at least 3 observations in front of the camera (throws std::invalid_argument otherwise).
 MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,

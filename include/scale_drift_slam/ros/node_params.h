@@ -24,6 +24,9 @@ struct FrameNames {
   std::string odom = "odom";
   std::string camera = "camera_link";            ///< The camera body (x forward, z up).
   std::string optical = "camera_optical_frame";  ///< The camera optical frame (z forward).
+  /// The robot's base (REP 105): odom -> base is published (or read), base -> camera is the
+  /// camera's mount. Empty: no base, the camera body takes its place (odom -> camera).
+  std::string base = "base_link";
 };
 
 /// tracking_node's own settings.
@@ -38,8 +41,20 @@ struct TrackingNodeParams {
   FrameNames frames;
   bool map_z_up = true;  ///< map = the first camera's body axes (upright), else its optical axes.
   bool publish_optical_transform = true;  ///< Static camera -> optical transform.
-  int path_publish_every = 5;             ///< Frames between nav_msgs/Path messages.
-  int path_max_poses = 20000;             ///< Oldest poses are dropped beyond this.
+  bool publish_tf = true;                 ///< map -> odom (and odom -> base) on tf.
+  /// odom -> base on tf; false when the robot's odometry owns it: then only map -> odom, through
+  /// the robot's odom -> base at the image's stamp (doc/ros.md, "tf on a robot").
+  bool publish_odom_tf = true;
+  /// The camera's mount base -> camera body, x y z [m] roll pitch yaw [rad] (as
+  /// static_transform_publisher), published only when tf has none after camera_mount_wait_s.
+  std::vector<double> camera_mount = std::vector<double>(6, 0.0);
+  double camera_mount_wait_s = 2.0;  ///< Wall time to wait at start for the mount on tf.
+  double odom_tf_timeout_s = 0.1;    ///< Wall time to wait for odom -> base at an image's stamp.
+  /// Pixel noise (one sigma per coordinate) that scales the motion-only BA's (J^T J)^-1 into the
+  /// nav_msgs/Odometry pose covariance.
+  double pose_pixel_sigma_px = 1.0;
+  int path_publish_every = 5;  ///< Frames between nav_msgs/Path messages.
+  int path_max_poses = 20000;  ///< Oldest poses are dropped beyond this.
   /// An image stamped more than this before the previous one restarts tracking (a bag played
   /// again); a smaller step back (a driver glitch) only drops the image.
   double time_jump_restart_s = 1.0;

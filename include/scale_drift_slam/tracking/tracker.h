@@ -81,6 +81,10 @@ struct FrameResult {
   bool rejected = false;  ///< The frame itself was unusable (see message).
   bool has_pose = false;  ///< T_cam_world is an estimate for this frame.
   geometry::SE3 T_cam_world;
+  /// J^T J of the motion-only BA's inliers (features::MotionOnlyResult::inlier_information):
+  /// features::poseCovariance of it is T_cam_world's covariance. Zero when the pose did not
+  /// come from the motion-only BA (map initialisation).
+  Eigen::Matrix<double, 6, 6> pose_information = Eigen::Matrix<double, 6, 6>::Zero();
   int num_visible = 0, num_found = 0, num_inliers = 0;
   std::vector<Eigen::Vector2d> tracked_px;      ///< Image positions of the inlier map points.
   std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
