@@ -11,11 +11,13 @@
    (tf map -> camera_optical_frame at each image) is within 0.1 % of its path in the first run's
    frame (evaluate_trajectory --alignment-from the first run's evaluation: one Sim(3), none
    re-estimated). The mapping node stopped alone (SIGINT) saves the map on shutdown
-   (~save_map_on_shutdown), the same keyframes as saved.
+   (~save_map_on_shutdown), the same keyframes as saved; run_sequence --load-map --localization
+   reads that file and relocalises in it within 10 frames (one format for ROS and offline).
 3. Bad map files: each node given a truncated file, and the tracking node a map of another camera,
    exits (code 1, not a crash) with the reason.
 """
 
+import csv
 import json
 import os
 import signal
@@ -140,7 +142,27 @@ class MapFileRos(unittest.TestCase):
             stop(slam)
             recorder.close()
         self.assertTrue(os.path.exists(map_file + '.shutdown'), 'no map saved on shutdown')
+        self.check_offline(map_file + '.shutdown', second, saved.keyframes)
         self.check_bad_files(map_file)
+
+    def check_offline(self, map_file, folder, keyframes):
+        """The file the node wrote is run_sequence's format: it loads and localises in it."""
+        out = os.path.join(sds.work_dir(), 'courtyard_ros_offline')
+        inline = os.path.join(sds.work_dir(), 'courtyard_ros_inline.yaml')
+        with open(inline, 'w') as config:  # the loop closer inline: the answer at the next frame
+            config.write('system:\n  mapping_thread: false\n')
+        log = subprocess.check_output(
+            [sds.tool('run_sequence'), folder, '--out', out, '--load-map', map_file,
+             '--localization', '--max-frames', '30', '--config', inline, '--quiet'],
+            stderr=subprocess.STDOUT).decode(errors='replace')
+        summary = json.load(open(os.path.join(out, 'summary.json')))
+        self.assertEqual(summary['loaded_map_keyframes'], keyframes, log)
+        self.assertEqual(summary['keyframes_added'], 0, log)
+        frames = list(csv.DictReader(open(os.path.join(out, 'frames.csv'))))
+        relocalised = [int(f['frame']) for f in frames if f['relocalised'] == '1']
+        print('run_sequence on the map the mapping node saved on shutdown: %d keyframes, '
+              'relocalised at frame %s' % (keyframes, relocalised[:1]))
+        self.assertTrue(relocalised and relocalised[0] < 10, log)
 
     def check_localisation(self, recorder, folder, first_evaluation, map_keyframes):
         statuses = recorder.statuses
