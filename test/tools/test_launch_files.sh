@@ -49,6 +49,16 @@ check(['/mapping_node', '/tracking_node'], 'euroc.launch', 'loop_closure:=false'
 check(['/mapping_node', '/tracking_node'], 'tum.launch', 'loop_closure:=false')
 params = check(slam + ['/player'], 'bag.launch', 'bag:=/some.bag')
 assert params['/use_sim_time'] is True, 'bag.launch does not use simulated time'
+# A map file reaches the three nodes; localisation only the tracker; saving the mapper.
+params = check(slam + ['/player'], 'bag.launch', 'bag:=/some.bag', 'map_file:=/m.map',
+               'localization_only:=true', 'save_map_on_shutdown:=/out.map')
+for node in slam:
+    assert params[node + '/map_file'] == '/m.map', node
+assert params['/tracking_node/localization_only'] is True
+assert params['/mapping_node/save_map_on_shutdown'] == '/out.map'
+params = check(slam, 'slam.launch')
+assert params['/tracking_node/localization_only'] is False
+assert params['/mapping_node/save_map_on_shutdown'] is False
 assert params['/tracking_node/image_queue_size'] == 100
 params = check(['/loop_closure_node', '/mapping_node', '/play_sequence', '/tracking_node'],
                'demo.launch')
