@@ -289,7 +289,7 @@ std::string serialisePayload(const MapFile& file) {
   return stream.str();
 }
 
-MapFile parsePayload(const char* payload, std::size_t size) {
+MapFile parsePayload(const char* payload, std::size_t size, bool validate = true) {
   MemoryBuffer buffer(payload, size);
   std::istream stream(&buffer);
   cereal::PortableBinaryInputArchive ar(stream);
@@ -314,8 +314,10 @@ MapFile parsePayload(const char* payload, std::size_t size) {
       throw std::invalid_argument("two images of keyframe " + std::to_string(id));
     }
   }
-  file.calibration.validate();
-  s.validate();
+  if (validate) {
+    file.calibration.validate();
+    s.validate();
+  }
   return file;
 }
 
@@ -397,10 +399,31 @@ MapFile loadMapFile(const std::string& path) {
   const std::string data = readWhole(path);
   const std::size_t size = checkedPayload(data, path);
   try {
-    return parsePayload(data.data() + kHeaderBytes, size);
+    MapFile file = parsePayload(data.data() + kHeaderBytes, size);
+    file.checksum = getLittle<std::uint64_t>(data, 24);
+    return file;
   } catch (const std::exception& e) {  // cereal::Exception, std::invalid_argument, bad_alloc
     throw MapFileError(MapFileError::Kind::kMalformed,
                        "map file '" + path + "': malformed content: " + e.what());
+  }
+}
+
+std::uint32_t mapFileSession(const MapFile& file) {
+  return static_cast<std::uint32_t>(file.checksum ^ (file.checksum >> 32)) | 1u;
+}
+
+std::string encodeSnapshotPart(const system::MapSnapshot& part) {
+  MapFile file;
+  file.snapshot = part;
+  return serialisePayload(file);
+}
+
+system::MapSnapshot decodeSnapshotPart(const std::string& bytes) {
+  try {
+    return parsePayload(bytes.data(), bytes.size(), false).snapshot;
+  } catch (const std::exception& e) {
+    throw MapFileError(MapFileError::Kind::kMalformed,
+                       std::string("a part of a map: malformed content: ") + e.what());
   }
 }
 

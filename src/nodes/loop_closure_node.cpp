@@ -11,17 +11,23 @@
 // LoopCloser (with the camera the keyframe carries); a restarted mapping node is followed through
 // map version epochs (system/map_versions.h), the map copy is kept.
 
+#include <chrono>
+#include <future>
 #include <thread>
 #include <variant>
 
 #include <ros/ros.h>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/GetMapPart.h"
 #include "scale_drift_slam/common/message_queue.h"
+#include "scale_drift_slam/io/map_file.h"
+#include "scale_drift_slam/loop/vocabulary.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/node_params.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/system/loop_closer_endpoint.h"
+#include "scale_drift_slam/system/map_snapshot.h"
 
 namespace {
 
@@ -42,12 +48,19 @@ struct RequestInput {
   system::Addressed<map::RelocalisationRequest> request;
   ros::Time stamp;
 };
-using Input = std::variant<KeyframeInput, UpdateInput, RequestInput>;
+/// ~get_map_part: the worker answers after the keyframes queued before it.
+struct PartInput {
+  std::shared_ptr<std::promise<scale_drift_slam::GetMapPart::Response>> reply;
+};
+using Input = std::variant<KeyframeInput, UpdateInput, RequestInput, PartInput>;
 
 class LoopClosureNode {
  public:
-  LoopClosureNode(ros::NodeHandle& nh, ros_conversions::LoopClosureNodeConfig config)
+  LoopClosureNode(ros::NodeHandle& nh, ros::NodeHandle& pnh,
+                  ros_conversions::LoopClosureNodeConfig config)
       : config_(std::move(config)) {
+    if (!config_.node.map_file.empty()) loadMap(config_.node.map_file);  // throws: main exits
+    map_part_srv_ = pnh.advertiseService("get_map_part", &LoopClosureNode::onGetMapPart, this);
     keyframe_sub_ = nh.subscribe("keyframes", config_.node.keyframe_queue_size,
                                  &LoopClosureNode::onKeyframe, this);
     update_sub_ = nh.subscribe("map_updates", 100, &LoopClosureNode::onMapUpdate, this);
@@ -73,7 +86,43 @@ class LoopClosureNode {
   LoopClosureNode& operator=(const LoopClosureNode&) = delete;
 
  private:
+  /// ~map_file (doc/map_file.md, "In ROS"): the database and the map copy of the saved map, under
+  /// the session the tracking node restores it with. Before the worker starts.
+  void loadMap(const std::string& path) {
+    io::MapFile file = io::loadMapFile(path);
+    std::shared_ptr<const loop::Vocabulary> vocabulary;
+    if (!file.snapshot.vocabulary.empty()) {
+      vocabulary = std::make_shared<const loop::Vocabulary>(
+          loop::Vocabulary::fromBytes(file.snapshot.vocabulary, "in the map file " + path));
+    }
+    const std::size_t keyframes = file.snapshot.map.numKeyframes();
+    const std::size_t places = file.snapshot.places.size();
+    const std::uint32_t session = io::mapFileSession(file);
+    endpoint_.restore(session, geometry::makeCameraModel(file.calibration),
+                      std::move(file.snapshot.map), std::move(vocabulary),
+                      std::move(file.snapshot.places), std::move(file.snapshot.keyframe_images));
+    ROS_INFO("map file %s: %zu keyframes, %zu places (session %u); camera %s", path.c_str(),
+             keyframes, places, session, file.calibration.describe().c_str());
+  }
+
   // ---- main thread: convert and queue ----
+  bool onGetMapPart(scale_drift_slam::GetMapPart::Request&,
+                    scale_drift_slam::GetMapPart::Response& response) {
+    auto reply = std::make_shared<std::promise<scale_drift_slam::GetMapPart::Response>>();
+    std::future<scale_drift_slam::GetMapPart::Response> answer = reply->get_future();
+    queue(PartInput{reply});
+    try {
+      if (answer.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
+        throw std::runtime_error("the worker did not answer within 60 s");
+      }
+      response = answer.get();
+    } catch (const std::exception& e) {  // a broken promise: the worker stopped
+      response.success = false;
+      response.message = std::string("no part of the map: ") + e.what();
+    }
+    return true;
+  }
+
   void onKeyframe(const scale_drift_slam::KeyframeConstPtr& msg) {
     std::string image_problem;
     map::KeyframeMessage keyframe;
@@ -210,6 +259,27 @@ class LoopClosureNode {
     publishAnswer(answer, in.stamp);
   }
 
+  void handle(PartInput& in) {
+    scale_drift_slam::GetMapPart::Response response;
+    response.session = endpoint_.session();
+    try {
+      if (const loop::LoopCloser* closer = endpoint_.closer()) {
+        const system::MapSnapshot part = system::loopCloserPart(*closer);
+        const std::string bytes = io::encodeSnapshotPart(part);
+        response.part.assign(bytes.begin(), bytes.end());
+        response.success = true;
+        response.message = std::to_string(part.places.size()) + " places, " +
+                           (part.vocabulary.empty() ? "no vocabulary yet" : "the vocabulary");
+      } else {
+        response.message = "the loop-closure node has no keyframe yet";
+      }
+    } catch (const std::exception& e) {
+      response.success = false;
+      response.message = e.what();
+    }
+    in.reply->set_value(std::move(response));
+  }
+
   /// Any thread: publishers are thread-safe.
   void publishAnswer(const system::Addressed<map::RelocalisationAnswer>& answer,
                      const ros::Time& stamp) {
@@ -223,6 +293,7 @@ class LoopClosureNode {
   ros_conversions::LoopClosureNodeConfig config_;
   ros::Subscriber keyframe_sub_, update_sub_, request_sub_;
   ros::Publisher constraint_pub_, answer_pub_;
+  ros::ServiceServer map_part_srv_;
   common::MessageQueue<Input> inbox_;
   /// The worker's: the loop closer and its session rule (system/loop_closer_endpoint.h).
   system::LoopCloserEndpoint endpoint_{config_.slam.loop, config_.slam.messages};
@@ -245,7 +316,12 @@ int main(int argc, char** argv) {
   for (const std::string& name : config.unknown)
     ROS_WARN("unknown parameter %s is ignored", name.c_str());
   cv::setNumThreads(1);  // the worker's OpenCV calls stay on its thread
-  LoopClosureNode node(nh, std::move(config));
-  ros::spin();  // the callbacks only queue: one thread is plenty
+  try {
+    LoopClosureNode node(nh, pnh, std::move(config));
+    ros::spin();  // the callbacks only queue (~get_map_part waits for the worker)
+  } catch (const std::exception& e) {  // an unusable ~map_file
+    ROS_FATAL("loop_closure_node: %s", e.what());
+    return 1;
+  }
   return 0;
 }

@@ -6,22 +6,33 @@
 // a latched PointCloud2 and the keyframes and loop edges as markers. The first keyframe of a new
 // tracker session (the tracker was reset or restarted) starts a new map; constraints of another
 // session are refused. Services: ~save_trajectory (TUM file of the keyframes), ~reset (a new, empty
-// map). Everything runs on the main thread, one message at a time, so the map needs no lock.
+// map), ~save_map (a map file, with the parts the tracking and loop-closure nodes hold, asked
+// for through their ~get_map_part); ~map_file starts in a saved map (doc/map_file.md, "In ROS").
+// Everything runs on the main thread, one message at a time, so the map needs no lock.
 
+#include <atomic>
+#include <csignal>
+#include <filesystem>
 #include <optional>
 #include <random>
 #include <utility>
 
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 
+#include "scale_drift_slam/GetMapPart.h"
+#include "scale_drift_slam/SaveMap.h"
 #include "scale_drift_slam/SaveTrajectory.h"
+#include "scale_drift_slam/io/map_file.h"
+#include "scale_drift_slam/io/slam_params_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/frames.h"
 #include "scale_drift_slam/ros/node_params.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/ros/visualization.h"
+#include "scale_drift_slam/system/map_snapshot.h"
 #include "scale_drift_slam/system/mapper_endpoint.h"
 
 namespace {
@@ -35,6 +46,7 @@ class MappingNode {
         params_(config_.node),
         T_map_world_(ros_conversions::mapFromWorld(params_.map_z_up)),
         endpoint_(config_.slam.mapper, newMapperId(), config_.slam.messages) {
+    if (!params_.map_file.empty()) loadMap();  // throws what is wrong with it: main exits
     keyframe_sub_ =
         nh.subscribe("keyframes", params_.keyframe_queue_size, &MappingNode::onKeyframe, this);
     constraint_sub_ = nh.subscribe("loop_constraints", 10, &MappingNode::onLoopConstraint, this);
@@ -43,10 +55,113 @@ class MappingNode {
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
     save_srv_ = pnh.advertiseService("save_trajectory", &MappingNode::onSaveTrajectory, this);
     reset_srv_ = pnh.advertiseService("reset", &MappingNode::onReset, this);
+    save_map_srv_ = pnh.advertiseService("save_map", &MappingNode::onSaveMap, this);
+    if (endpoint_.map().numKeyframes() > 0) publishMap();
+  }
+
+  /// ~save_map_on_shutdown: before ros::shutdown (the other nodes may be gone by then: the save
+  /// then fails with the reason, doc/map_file.md "In ROS").
+  void saveOnShutdown() {
+    if (params_.save_map_on_shutdown.empty()) return;
+    const std::string path = params_.save_map_on_shutdown == "true" ? params_.save_map_file
+                                                                    : params_.save_map_on_shutdown;
+    const SaveResult result = saveMap(path, 3.0);
+    if (result.success) {
+      ROS_INFO("on shutdown: %s", result.message.c_str());
+    } else {
+      ROS_ERROR("on shutdown: the map was not saved: %s", result.message.c_str());
+    }
   }
 
  private:
   static std::uint32_t newMapperId() { return std::random_device{}() | 1u; }
+
+  /// ~map_file: the saved map, under the session the tracking node restores it with.
+  void loadMap() {
+    io::MapFile file = io::loadMapFile(params_.map_file);
+    const std::uint32_t session = io::mapFileSession(file);
+    calibration_ = file.calibration;
+    endpoint_.restore(session, file.calibration.meanFocalLength(), std::move(file.snapshot.map),
+                      std::move(file.snapshot.loop_edges));
+    ROS_INFO("map file %s: %zu keyframes, %zu points, %zu loop edges (session %u); camera %s",
+             params_.map_file.c_str(), endpoint_.map().numKeyframes(), endpoint_.map().numPoints(),
+             endpoint_.loopEdges().size(), session, file.calibration.describe().c_str());
+  }
+
+  struct SaveResult {
+    bool success = false;
+    std::string message;
+    std::size_t keyframes = 0, points = 0, bytes = 0;
+  };
+
+  /// The part a node holds (its ~get_map_part), checked to be of this map's session.
+  system::MapSnapshot mapPart(const std::string& node, double timeout_s) {
+    ros::NodeHandle nh;
+    const std::string name = node + "/get_map_part";
+    ros::ServiceClient client = nh.serviceClient<scale_drift_slam::GetMapPart>(name);
+    if (!client.waitForExistence(ros::Duration(timeout_s))) {
+      throw std::runtime_error(nh.resolveName(name) + " is not there (is " + node + " running?)");
+    }
+    scale_drift_slam::GetMapPart call;
+    if (!client.call(call)) throw std::runtime_error(nh.resolveName(name) + " failed");
+    if (!call.response.success) throw std::runtime_error(node + ": " + call.response.message);
+    if (call.response.session != endpoint_.session()) {
+      throw std::runtime_error(node + " is on another map (tracker session " +
+                               std::to_string(call.response.session) + ", the mapper's " +
+                               std::to_string(endpoint_.session()) + ")");
+    }
+    ROS_INFO("%s: %s (%zu bytes)", node.c_str(), call.response.message.c_str(),
+             call.response.part.size());
+    return io::decodeSnapshotPart(
+        std::string(call.response.part.begin(), call.response.part.end()));
+  }
+
+  /// Joins the map with the tracker's and the loop closer's parts and writes it atomically.
+  SaveResult saveMap(const std::string& path, double timeout_s) {
+    SaveResult result;
+    try {
+      if (path.empty()) throw std::runtime_error("no path given and ~save_map_file is not set");
+      if (endpoint_.map().numKeyframes() == 0 || !calibration_) {
+        throw std::runtime_error("there is no map yet");
+      }
+      io::MapFile file;
+      file.calibration = *calibration_;
+      file.params_yaml = io::formatSlamParams(config_.slam);
+      file.map_version = endpoint_.map().version();
+      file.snapshot = system::joinParts(endpoint_.map(), endpoint_.loopEdges(),
+                                        mapPart("tracking_node", timeout_s),
+                                        mapPart("loop_closure_node", timeout_s));
+      file.snapshot.validate();
+      io::saveMapFile(path, file);
+      result.keyframes = file.snapshot.map.numKeyframes();
+      result.points = file.snapshot.map.numPoints();
+      result.bytes = std::filesystem::file_size(path);
+      result.success = true;
+      result.message = "map saved to " + path + ": " + std::to_string(result.keyframes) +
+                       " keyframes, " + std::to_string(result.points) + " points, " +
+                       std::to_string(result.bytes) + " bytes";
+    } catch (const std::exception& e) {
+      result.message = e.what();
+    }
+    return result;
+  }
+
+  bool onSaveMap(scale_drift_slam::SaveMap::Request& request,
+                 scale_drift_slam::SaveMap::Response& response) {
+    const SaveResult result =
+        saveMap(request.path.empty() ? params_.save_map_file : request.path, 10.0);
+    response.success = result.success;
+    response.message = result.message;
+    response.keyframes = static_cast<std::uint32_t>(result.keyframes);
+    response.points = static_cast<std::uint32_t>(result.points);
+    response.bytes = result.bytes;
+    if (result.success) {
+      ROS_INFO("%s", result.message.c_str());
+    } else {
+      ROS_ERROR("~save_map: %s", result.message.c_str());
+    }
+    return true;
+  }
 
   void onKeyframe(const scale_drift_slam::KeyframeConstPtr& msg) {
     map::KeyframeMessage keyframe;
@@ -67,6 +182,7 @@ class MappingNode {
           const geometry::CameraCalibration calibration =
               ros_conversions::calibrationFromCameraInfo(msg->camera);
           camera = calibration.describe();
+          calibration_ = calibration;
           return calibration.meanFocalLength();
         });
     const double ms = (ros::WallTime::now() - start).toSec() * 1e3;
@@ -208,7 +324,8 @@ class MappingNode {
   geometry::SE3 T_map_world_;
   ros::Subscriber keyframe_sub_, constraint_sub_;
   ros::Publisher update_pub_, cloud_pub_, marker_pub_;
-  ros::ServiceServer save_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, reset_srv_, save_map_srv_;
+  std::optional<geometry::CameraCalibration> calibration_;  ///< The map's camera.
 
   /// The map and its session rule (system/mapper_endpoint.h), as SlamSystem's mapping thread has.
   system::MapperEndpoint endpoint_;
@@ -218,8 +335,14 @@ class MappingNode {
 
 }  // namespace
 
+std::atomic<bool> g_shutdown_requested{false};
+void onSigint(int) {
+  g_shutdown_requested = true;
+}
+
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "mapping_node");
+  ros::init(argc, argv, "mapping_node", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, onSigint);
   ros::NodeHandle nh, pnh("~");
   ros_conversions::MappingNodeConfig config;
   try {
@@ -231,7 +354,18 @@ int main(int argc, char** argv) {
   ROS_INFO("mapping_node parameters:\n%s", ros_conversions::describe(config).c_str());
   for (const std::string& name : config.unknown)
     ROS_WARN("unknown parameter %s is ignored", name.c_str());
-  MappingNode node(nh, pnh, std::move(config));
-  ros::spin();
+  try {
+    MappingNode node(nh, pnh, std::move(config));
+    // Our own SIGINT handling, so that ~save_map_on_shutdown runs while the node is still up.
+    while (ros::ok() && !g_shutdown_requested) {
+      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.1));
+    }
+    node.saveOnShutdown();
+  } catch (const std::exception& e) {  // an unusable ~map_file
+    ROS_FATAL("mapping_node: %s", e.what());
+    ros::shutdown();
+    return 1;
+  }
+  ros::shutdown();
   return 0;
 }

@@ -17,6 +17,8 @@
 #include <std_srvs/Trigger.h>
 #include <opencv2/core.hpp>
 
+#include "scale_drift_slam/GetMapPart.h"
+#include "scale_drift_slam/io/map_file.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/image_conversions.h"
 #include "scale_drift_slam/ros/image_stamps.h"
@@ -24,6 +26,7 @@
 #include "scale_drift_slam/ros/pose_publisher.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/ros/visualization.h"
+#include "scale_drift_slam/system/map_snapshot.h"
 #include "scale_drift_slam/system/tracker_inbox.h"
 
 namespace {
@@ -36,6 +39,7 @@ class TrackingNode {
                ros_conversions::TrackingNodeConfig config)
       : config_(std::move(config)), params_(config_.node), it_(nh), poses_(nh, params_) {
     inbox_.startSession(newSession());
+    if (!params_.map_file.empty()) loadMap();  // throws what is wrong with it: main exits
     if (config_.calibration) setCamera(*config_.calibration);
     subscribeImages(nh);
     info_sub_ = nh.subscribe("camera_info", 5, &TrackingNode::onCameraInfo, this);
@@ -51,6 +55,7 @@ class TrackingNode {
     status_pub_ = nh.advertise<scale_drift_slam::TrackingStatus>("tracking_status", 10);
     debug_pub_ = it_.advertise("debug_image", 1);
     reset_srv_ = pnh.advertiseService("reset", &TrackingNode::onReset, this);
+    map_part_srv_ = pnh.advertiseService("get_map_part", &TrackingNode::onGetMapPart, this);
     update_spinner_.start();
   }
   ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
@@ -104,7 +109,50 @@ class TrackingNode {
   void resetTracker(const std::string& why) {
     if (!why.empty()) ROS_WARN("resetting the tracker: %s", why.c_str());
     tracker_ = std::make_unique<tracking::Tracker>(camera_, config_.slam.tracker);
+    if (loaded_map_) {
+      restoreLoadedMap();
+      return;
+    }
     startSession();
+  }
+
+  /// ~map_file (doc/map_file.md, "In ROS"): read and checked at start, restored into each new
+  /// tracker once the camera is known.
+  void loadMap() {
+    loaded_map_ = io::loadMapFile(params_.map_file);
+    if (config_.calibration) {
+      io::checkMapCamera(*loaded_map_, *config_.calibration, params_.map_file);
+    }
+    ROS_INFO("map file %s: %zu keyframes, %zu points (session %u)%s", params_.map_file.c_str(),
+             loaded_map_->snapshot.map.numKeyframes(), loaded_map_->snapshot.map.numPoints(),
+             io::mapFileSession(*loaded_map_),
+             params_.localization_only ? "; localization only: no keyframe will be made" : "");
+  }
+
+  /// The tracker starts lost in the loaded map, under the session the mapping and loop-closure
+  /// nodes restored it with, and asks for relocalisation. Localisation only: every later reset
+  /// (~reset, a time jump) comes back to it; mapping: a later reset starts a new map as usual.
+  void restoreLoadedMap() {
+    const io::MapFile& file = *loaded_map_;
+    try {
+      io::checkMapCamera(file, calibration_, params_.map_file);
+    } catch (const io::MapFileError& e) {
+      ROS_FATAL("%s: not tracking, shutting down", e.what());
+      tracker_.reset();
+      ros::shutdown();
+      return;
+    }
+    std::vector<std::pair<map::KeyframeId, map::KeyframeId>> loop_links;
+    for (const loop::PoseGraphEdge& edge : file.snapshot.loop_edges)
+      loop_links.emplace_back(edge.from, edge.to);
+    tracker_->restoreMap(file.snapshot.map, file.snapshot.point_appearances, loop_links);
+    tracker_->setLocalizationOnly(params_.localization_only);
+    inbox_.startSession(io::mapFileSession(file));
+    poses_.reset();
+    last_state_.reset();
+    ROS_INFO("tracking in the map of %s: lost until relocalised by place recognition",
+             params_.map_file.c_str());
+    if (!params_.localization_only) loaded_map_.reset();
   }
 
   /// A new map: its keyframes carry a new session, on which the mapper and the loop closer
@@ -260,6 +308,23 @@ class TrackingNode {
     return true;
   }
 
+  /// ~get_map_part: the tracker's point appearances, for the mapping node's ~save_map.
+  bool onGetMapPart(scale_drift_slam::GetMapPart::Request&,
+                    scale_drift_slam::GetMapPart::Response& response) {
+    response.session = inbox_.session();
+    if (!tracker_) {
+      response.success = false;
+      response.message = "the tracking node has no camera yet, hence no map";
+      return true;
+    }
+    const system::MapSnapshot part = system::trackerPart(*tracker_);
+    const std::string bytes = io::encodeSnapshotPart(part);
+    response.part.assign(bytes.begin(), bytes.end());
+    response.success = true;
+    response.message = std::to_string(part.point_appearances.size()) + " point appearances";
+    return true;
+  }
+
   ros_conversions::TrackingNodeConfig config_;
   const ros_conversions::TrackingNodeParams& params_;
   ros::CallbackQueue update_queue_;  // outlives the subscription that uses it
@@ -268,7 +333,8 @@ class TrackingNode {
   image_transport::Publisher debug_pub_;
   ros::Subscriber compressed_sub_, info_sub_, update_sub_, answer_sub_;
   ros::Publisher keyframe_pub_, request_pub_, status_pub_;
-  ros::ServiceServer reset_srv_;
+  ros::ServiceServer reset_srv_, map_part_srv_;
+  std::optional<io::MapFile> loaded_map_;  ///< ~map_file, until restored (kept: localization)
   std::string image_topic_;
   ros_conversions::PosePublisher poses_;  ///< tf, odometry and path; the loop correction.
 

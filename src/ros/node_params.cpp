@@ -78,6 +78,20 @@ class Reader {
       }
     }
   }
+  /// A path, or a bool: true gives "true", false "".
+  void readPathOrBool(const std::string& key, std::string* value) {
+    known_.insert(key);
+    if (!params_.hasMember(key)) return;
+    XmlRpcValue& v = params_[key];
+    if (v.getType() == XmlRpcValue::TypeBoolean) {
+      *value = static_cast<bool>(v) ? "true" : "";
+    } else if (v.getType() == XmlRpcValue::TypeString) {
+      *value = static_cast<std::string>(v);
+      if (*value == "false") value->clear();
+    } else {
+      fail(key, "must be a path or a bool, got " + kindName(v.getType()));
+    }
+  }
   void read(const std::string& key, double* value) {
     known_.insert(key);
     if (!params_.hasMember(key)) return;
@@ -209,6 +223,8 @@ void TrackingNodeParams::validate() const {
   check(camera_mount.size() == 6, "camera_mount", "must be [x, y, z, roll, pitch, yaw]");
   for (const double x : camera_mount)
     check(std::isfinite(x), "camera_mount", "must be finite numbers");
+  check(!localization_only || !map_file.empty(), "localization_only",
+        "needs ~map_file (there is no map to localise in)");
   std::vector<std::pair<std::string, std::string>> names = {{"map_frame", frames.map},
                                                             {"odom_frame", frames.odom},
                                                             {"camera_frame", frames.camera},
@@ -228,6 +244,8 @@ void MappingNodeParams::validate() const {
         "must be a non-empty frame name without '/'");
   check(keyframe_queue_size >= 1, "keyframe_queue_size", "must be >= 1");
   check(std::isfinite(marker_scale) && marker_scale > 0.0, "marker_scale", "must be > 0");
+  check(save_map_on_shutdown != "true" || !save_map_file.empty(), "save_map_on_shutdown",
+        "is true but ~save_map_file is not set");
 }
 
 void LoopClosureNodeParams::validate() const {
@@ -289,6 +307,8 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   reader.read("path_publish_every", &p.path_publish_every);
   reader.read("path_max_poses", &p.path_max_poses);
   reader.read("time_jump_restart_s", &p.time_jump_restart_s);
+  reader.read("map_file", &p.map_file);
+  reader.read("localization_only", &p.localization_only);
   p.validate();
   config.slam = slamParams(private_params);
   if (!p.calibration_file.empty()) {
@@ -312,6 +332,9 @@ MappingNodeConfig mappingNodeConfig(const XmlRpc::XmlRpcValue& private_params) {
   reader.read("trajectory_file", &p.trajectory_file);
   reader.read("keyframe_queue_size", &p.keyframe_queue_size);
   reader.read("marker_scale", &p.marker_scale);
+  reader.read("map_file", &p.map_file);
+  reader.read("save_map_file", &p.save_map_file);
+  reader.readPathOrBool("save_map_on_shutdown", &p.save_map_on_shutdown);
   p.validate();
   config.slam = slamParams(private_params);
   config.unknown = reader.unknown(slamSections());
@@ -324,6 +347,7 @@ LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_p
   LoopClosureNodeParams& p = config.node;
   reader.read("config", &p.config_file);
   reader.read("keyframe_queue_size", &p.keyframe_queue_size);
+  reader.read("map_file", &p.map_file);
   p.validate();
   config.slam = slamParams(private_params);
   config.unknown = reader.unknown(slamSections());
@@ -362,7 +386,9 @@ std::string describe(const TrackingNodeConfig& c) {
       << "\npose_pixel_sigma_px: " << p.pose_pixel_sigma_px
       << "\npath_publish_every: " << p.path_publish_every
       << "\npath_max_poses: " << p.path_max_poses
-      << "\ntime_jump_restart_s: " << p.time_jump_restart_s << "\n# SLAM parameters\n"
+      << "\ntime_jump_restart_s: " << p.time_jump_restart_s
+      << "\nmap_file: " << (p.map_file.empty() ? "(none: a new map)" : p.map_file)
+      << "\nlocalization_only: " << p.localization_only << "\n# SLAM parameters\n"
       << io::formatSlamParams(c.slam);
   return out.str();
 }
@@ -374,6 +400,10 @@ std::string describe(const MappingNodeConfig& c) {
       << "\nmap_frame: " << p.map_frame << "\nmap_z_up: " << p.map_z_up
       << "\ntrajectory_file: " << (p.trajectory_file.empty() ? "(none)" : p.trajectory_file)
       << "\nkeyframe_queue_size: " << p.keyframe_queue_size << "\nmarker_scale: " << p.marker_scale
+      << "\nmap_file: " << (p.map_file.empty() ? "(none: a new map)" : p.map_file)
+      << "\nsave_map_file: " << (p.save_map_file.empty() ? "(none)" : p.save_map_file)
+      << "\nsave_map_on_shutdown: "
+      << (p.save_map_on_shutdown.empty() ? "(no)" : p.save_map_on_shutdown)
       << "\n# SLAM parameters\n"
       << io::formatSlamParams(c.slam);
   return out.str();
@@ -384,7 +414,9 @@ std::string describe(const LoopClosureNodeConfig& c) {
   const loop::PlaceRecognitionParams& r = loop.recognition;
   std::ostringstream out;
   out << "config: " << (c.node.config_file.empty() ? "(defaults)" : c.node.config_file)
-      << "\nkeyframe_queue_size: " << c.node.keyframe_queue_size << "\n# SLAM parameters\n";
+      << "\nkeyframe_queue_size: " << c.node.keyframe_queue_size
+      << "\nmap_file: " << (c.node.map_file.empty() ? "(none: a new map)" : c.node.map_file)
+      << "\n# SLAM parameters\n";
   // The loop closer's sections of the whole file; place recognition in short.
   const YAML::Node all = YAML::Load(io::formatSlamParams(c.slam));
   for (const char* section : {"loop_closure", "loop_verification"}) {

@@ -82,37 +82,61 @@ void MapSnapshot::validate() const {
   }
 }
 
+MapSnapshot trackerPart(const tracking::Tracker& tracker) {
+  MapSnapshot part;
+  const tracking::TrackingMap& tracked = tracker.trackingMap();
+  for (const auto& [id, keyframe] : tracked.keyframes()) {
+    for (const map::PointId point : keyframe.points) {
+      if (tracked.hasPoint(point) && !tracked.point(point).appearance.empty()) {
+        part.point_appearances.emplace(point, tracked.point(point).appearance);
+      }
+    }
+  }
+  return part;
+}
+
+MapSnapshot loopCloserPart(const loop::LoopCloser& closer) {
+  MapSnapshot part;
+  const loop::PlaceRecognizer& recognizer = closer.recognizer();
+  if (recognizer.vocabularyReady()) part.vocabulary = recognizer.vocabulary()->toBytes();
+  for (const loop::PlaceRecognizer::Place& place : recognizer.places()) {
+    loop::SavedPlace kept{place.id, place.timestamp, *place.appearance, false, {}, {}};
+    if (place.bow && place.groups) {
+      kept.indexed = true;
+      kept.bow = *place.bow;
+      kept.groups = *place.groups;
+    }
+    part.places.push_back(std::move(kept));
+  }
+  part.keyframe_images = closer.keyframeImages();
+  return part;
+}
+
+MapSnapshot joinParts(const map::Map& map, std::vector<loop::PoseGraphEdge> loop_edges,
+                      const MapSnapshot& tracker_part, const MapSnapshot& loop_closer_part) {
+  MapSnapshot saved;
+  saved.map = map;
+  saved.loop_edges = std::move(loop_edges);
+  for (const auto& [id, appearance] : tracker_part.point_appearances) {
+    if (map.hasPoint(id)) saved.point_appearances.emplace(id, appearance);
+  }
+  saved.vocabulary = loop_closer_part.vocabulary;
+  for (const loop::SavedPlace& place : loop_closer_part.places) {
+    if (map.hasKeyframe(place.id)) saved.places.push_back(place);
+  }
+  for (const auto& [id, jpeg] : loop_closer_part.keyframe_images) {
+    if (map.hasKeyframe(id)) saved.keyframe_images.emplace(id, jpeg);
+  }
+  return saved;
+}
+
 MapSnapshot SlamSystem::snapshot() const {
   if (!finished_) throw std::logic_error("SlamSystem::snapshot: call finish() first");
   const map::Map& map = mapper_.map();
   if (map.numKeyframes() == 0) throw std::logic_error("SlamSystem::snapshot: there is no map");
-  MapSnapshot saved;
-  saved.map = map;
-  saved.loop_edges = mapper_.loopEdges();
-  const tracking::TrackingMap& tracked = tracker_.trackingMap();
-  for (const auto& [id, point] : map.points()) {
-    if (tracked.hasPoint(id) && !tracked.point(id).appearance.empty()) {
-      saved.point_appearances.emplace(id, tracked.point(id).appearance);
-    }
-  }
-  if (const loop::LoopCloser* closer = loop_closer_.closer()) {
-    const loop::PlaceRecognizer& recognizer = closer->recognizer();
-    if (recognizer.vocabularyReady()) saved.vocabulary = recognizer.vocabulary()->toBytes();
-    for (const loop::PlaceRecognizer::Place& place : recognizer.places()) {
-      if (!map.hasKeyframe(place.id)) continue;
-      loop::SavedPlace kept{place.id, place.timestamp, *place.appearance, false, {}, {}};
-      if (place.bow && place.groups) {
-        kept.indexed = true;
-        kept.bow = *place.bow;
-        kept.groups = *place.groups;
-      }
-      saved.places.push_back(std::move(kept));
-    }
-    for (const auto& [id, jpeg] : closer->keyframeImages()) {
-      if (map.hasKeyframe(id)) saved.keyframe_images.emplace(id, jpeg);
-    }
-  }
-  return saved;
+  const loop::LoopCloser* closer = loop_closer_.closer();
+  return joinParts(map, mapper_.loopEdges(), trackerPart(tracker_),
+                   closer ? loopCloserPart(*closer) : MapSnapshot());
 }
 
 void SlamSystem::restore(MapSnapshot snapshot, bool localization_only) {

@@ -204,6 +204,47 @@ TEST(MapFile, SaveThenLoadGivesBackEveryField) {
   EXPECT_EQ(readBytes(path), readBytes(again));
 }
 
+// The ROS path (doc/map_file.md "In ROS"): the parts the nodes send to the mapping node, joined
+// with its map, give the file SlamSystem::snapshot gives; the session every node derives from the
+// loaded file is the same and follows the file's content.
+TEST(MapFile, PartsSentBetweenTheNodesJoinToTheWholeSnapshot) {
+  const system::MapSnapshot& whole = firstRun().file.snapshot;
+  system::MapSnapshot tracker_part, loop_part;
+  tracker_part.point_appearances = whole.point_appearances;
+  loop_part.vocabulary = whole.vocabulary;
+  loop_part.places = whole.places;
+  loop_part.keyframe_images = whole.keyframe_images;
+  // Something of a point and a keyframe the mapper no longer (or not yet) has is left out.
+  const map::PointId stray_point = whole.map.points().begin()->first + 1000000;
+  tracker_part.point_appearances.emplace(stray_point, whole.point_appearances.begin()->second);
+  loop_part.keyframe_images.emplace(999999, std::vector<std::uint8_t>{1, 2, 3});
+  MapFile joined = firstRun().file;
+  joined.snapshot = system::joinParts(whole.map, whole.loop_edges,
+                                      decodeSnapshotPart(encodeSnapshotPart(tracker_part)),
+                                      decodeSnapshotPart(encodeSnapshotPart(loop_part)));
+  EXPECT_NO_THROW(joined.snapshot.validate());
+  expectSameFile(firstRun().file, joined);
+  // Bytes that are not a part: a clear error.
+  try {
+    decodeSnapshotPart("not a part of a map");
+    FAIL() << "garbage decoded";
+  } catch (const MapFileError& e) {
+    EXPECT_EQ(e.kind(), Kind::kMalformed);
+  }
+}
+
+TEST(MapFile, TheSessionOfALoadedMapIsTheFilesOwn) {
+  const std::string path = tempPath("session.map");
+  saveMapFile(path, firstRun().file);
+  const MapFile a = loadMapFile(path), b = loadMapFile(path);
+  EXPECT_NE(mapFileSession(a), 0u);
+  EXPECT_EQ(mapFileSession(a), mapFileSession(b));
+  MapFile other = firstRun().file;
+  other.map_version += 1;
+  saveMapFile(path, other);
+  EXPECT_NE(mapFileSession(loadMapFile(path)), mapFileSession(a));
+}
+
 TEST(MapFile, SavingReplacesTheFileAtOnceAndLeavesNoTemporaryFile) {
   const std::string path = tempPath("atomic.map");
   writeBytes(path, "an older file");

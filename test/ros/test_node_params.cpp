@@ -138,6 +138,40 @@ TEST(NodeParams, LoopClosureNodeReadsTheLoopSections) {
   EXPECT_NE(loop_error(p).find("loop_closure.enabled"), std::string::npos) << loop_error(p);
 }
 
+TEST(NodeParams, MapFileParameters) {
+  XmlRpcValue p = emptyStruct();
+  EXPECT_TRUE(trackingNodeConfig(p).node.map_file.empty());
+  EXPECT_FALSE(trackingNodeConfig(p).node.localization_only);
+  EXPECT_TRUE(mappingNodeConfig(p).node.save_map_on_shutdown.empty());
+  p["map_file"] = std::string("/maps/a.map");
+  p["localization_only"] = true;
+  const TrackingNodeConfig tracking = trackingNodeConfig(p);
+  EXPECT_EQ(tracking.node.map_file, "/maps/a.map");
+  EXPECT_TRUE(tracking.node.localization_only);
+  EXPECT_TRUE(tracking.unknown.empty());
+  EXPECT_NE(describe(tracking).find("localization_only: 1"), std::string::npos);
+  EXPECT_EQ(loopClosureNodeConfig(p).node.map_file, "/maps/a.map");
+  // Localisation needs a map.
+  p = emptyStruct();
+  p["localization_only"] = true;
+  EXPECT_NE(errorOf([&] { trackingNodeConfig(p); }).find("~localization_only: needs ~map_file"),
+            std::string::npos);
+  // ~save_map_on_shutdown: a path, true (~save_map_file), false.
+  p = emptyStruct();
+  p["save_map_on_shutdown"] = std::string("/maps/out.map");
+  EXPECT_EQ(mappingNodeConfig(p).node.save_map_on_shutdown, "/maps/out.map");
+  p["save_map_on_shutdown"] = false;
+  EXPECT_TRUE(mappingNodeConfig(p).node.save_map_on_shutdown.empty());
+  p["save_map_on_shutdown"] = true;
+  EXPECT_NE(errorOf([&] { mappingNodeConfig(p); }).find("~save_map_file is not set"),
+            std::string::npos);
+  p["save_map_file"] = std::string("/maps/b.map");
+  EXPECT_EQ(mappingNodeConfig(p).node.save_map_on_shutdown, "true");
+  p["save_map_on_shutdown"] = 3;
+  EXPECT_NE(errorOf([&] { mappingNodeConfig(p); }).find("must be a path or a bool"),
+            std::string::npos);
+}
+
 TEST(NodeParams, BadValuesNameTheParameter) {
   const auto tracking_error = [](XmlRpcValue p) { return errorOf([&] { trackingNodeConfig(p); }); };
   const auto mapping_error = [](XmlRpcValue p) { return errorOf([&] { mappingNodeConfig(p); }); };

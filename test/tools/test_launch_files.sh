@@ -62,14 +62,29 @@ for camera in ('fr1', 'fr2', 'fr3'):
                    'camera:=' + camera, 'bag:=/x.bag')
     assert params['/tracking_node/calibration_file'].endswith('config/tum_%s.yaml' % camera)
 
+# A map file reaches the three nodes; localisation only the tracker; saving the mapper.
+params = check(slam + ['/player'], 'bag.launch', 'bag:=/some.bag', 'map_file:=/m.map',
+               'localization_only:=true', 'save_map_on_shutdown:=/out.map')
+for node in slam:
+    assert params[node + '/map_file'] == '/m.map', node
+assert params['/tracking_node/localization_only'] is True
+assert params['/mapping_node/save_map_on_shutdown'] == '/out.map'
+params = check(slam, 'slam.launch')
+assert params['/tracking_node/localization_only'] is False
+assert params['/mapping_node/save_map_on_shutdown'] is False
+
 # Two machines: each side's nodes get the network environment of their machine.
 euroc = os.path.join(pkg, 'config', 'euroc_cam0.yaml')
 params = check(['/tracking_node'], 'robot.launch', 'master_uri:=http://10.0.0.1:11311',
-               'address:=10.0.0.2', 'image:=/cam0/image_raw', 'calibration_file:=' + euroc)
+               'address:=10.0.0.2', 'image:=/cam0/image_raw', 'calibration_file:=' + euroc,
+               'map_file:=/m.map', 'localization_only:=true')
 assert params['/tracking_node/calibration_file'] == euroc
+assert params['/tracking_node/map_file'] == '/m.map'
+assert params['/tracking_node/localization_only'] is True
 assert params['/tracking_node/keyframe_publish_queue_size'] == 200
-check(['/keyframe_relay', '/loop_closure_node', '/mapping_node'], 'base_station.launch',
-      'master_uri:=http://10.0.0.1:11311', 'address:=10.0.0.1')
+params = check(['/keyframe_relay', '/loop_closure_node', '/mapping_node'], 'base_station.launch',
+               'master_uri:=http://10.0.0.1:11311', 'address:=10.0.0.1', 'map_file:=/m.map')
+assert params['/mapping_node/map_file'] == params['/loop_closure_node/map_file'] == '/m.map'
 check(['/loop_closure_node', '/mapping_node'], 'base_station.launch', 'relay_keyframes:=false')
 for name, address, node in (('robot.launch', '10.0.0.2', 'tracking_node'),
                             ('base_station.launch', '10.0.0.1', 'mapping_node')):

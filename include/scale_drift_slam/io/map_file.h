@@ -23,7 +23,22 @@ struct MapFile {
   std::string params_yaml;        ///< The SLAM parameters of the run (io::formatSlamParams).
   std::uint64_t map_version = 0;  ///< The saved map's version (map::Map::version) when saved.
   system::MapSnapshot snapshot;
+  /// Set by loadMapFile: the payload's checksum from the header (not written; saveMapFile makes
+  /// its own). The ROS nodes derive the loaded map's tracker session from it (mapFileSession).
+  std::uint64_t checksum = 0;
 };
+
+/// The tracker session under which the ROS nodes that load the same file restore its map
+/// (doc/map_file.md, "In ROS"): a function of the file's checksum, never 0, so that the tracking,
+/// mapping and loop-closure nodes agree on it without talking to each other.
+std::uint32_t mapFileSession(const MapFile& file);
+
+/// Parts of a map sent between the ROS nodes (the tracker's point appearances, the loop closer's
+/// database) to the mapping node that writes the file: the snapshot serialised as the payload is,
+/// without the header and without MapSnapshot::validate (a part alone is not a whole map).
+std::string encodeSnapshotPart(const system::MapSnapshot& part);
+/// Throws MapFileError (kMalformed) when the bytes do not parse.
+system::MapSnapshot decodeSnapshotPart(const std::string& bytes);
 
 /// Why a map file was refused.
 class MapFileError : public std::runtime_error {

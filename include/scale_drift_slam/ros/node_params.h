@@ -58,6 +58,11 @@ struct TrackingNodeParams {
   /// An image stamped more than this before the previous one restarts tracking (a bag played
   /// again); a smaller step back (a driver glitch) only drops the image.
   double time_jump_restart_s = 1.0;
+  /// A map file to start in (doc/map_file.md, "In ROS"): the tracker starts lost in it and
+  /// relocalises by place recognition. Empty: a new map.
+  std::string map_file;
+  /// No keyframe is made: the loaded map does not change (needs map_file).
+  bool localization_only = false;
   void validate() const;
 };
 
@@ -69,6 +74,11 @@ struct MappingNodeParams {
   std::string trajectory_file;    ///< Default path of ~save_trajectory.
   int keyframe_queue_size = 100;  ///< Keyframes waiting for the window BA.
   double marker_scale = 0.05;     ///< Keyframe frustum size in map units (median depth 1 at start).
+  std::string map_file;           ///< A map file to start with (empty: a new map).
+  std::string save_map_file;      ///< Default path of ~save_map.
+  /// Where to save the map when the node shuts down: a path, or `true` for save_map_file (empty:
+  /// not saved).
+  std::string save_map_on_shutdown;
   void validate() const;
 };
 
@@ -76,6 +86,7 @@ struct MappingNodeParams {
 struct LoopClosureNodeParams {
   std::string config_file;
   int keyframe_queue_size = 100;  ///< roscpp queue of keyframes (the callback only hands them on).
+  std::string map_file;           ///< A map file to start with (empty: a new map).
   void validate() const;
 };
 

@@ -27,9 +27,11 @@
 
 #include "scale_drift_slam/features/active_search.h"
 #include "scale_drift_slam/loop/appearance.h"
+#include "scale_drift_slam/loop/loop_closer.h"
 #include "scale_drift_slam/loop/place_recognizer.h"
 #include "scale_drift_slam/loop/pose_graph.h"
 #include "scale_drift_slam/map/map.h"
+#include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::system {
 
@@ -47,5 +49,16 @@ struct MapSnapshot {
   /// with the observations, a non-finite pose or position, an invalid appearance.
   void validate() const;
 };
+
+/// The parts of a snapshot each part of the SLAM holds (SlamSystem::snapshot joins them in one
+/// process; the ROS mapping node joins the parts the other nodes send, doc/map_file.md "In ROS"):
+/// the tracker's point appearances (of the points of its keyframes),
+MapSnapshot trackerPart(const tracking::Tracker& tracker);
+/// the loop closer's vocabulary, places and keyframe images,
+MapSnapshot loopCloserPart(const loop::LoopCloser& closer);
+/// and the mapper's map and loop edges, with what the two parts hold of its keyframes and points
+/// (what they hold of others, removed or not yet added by the mapper, is left out).
+MapSnapshot joinParts(const map::Map& map, std::vector<loop::PoseGraphEdge> loop_edges,
+                      const MapSnapshot& tracker_part, const MapSnapshot& loop_closer_part);
 
 }  // namespace scale_drift_slam::system
