@@ -169,8 +169,12 @@ def run_rosservice(where, words):
     command = [w.replace('/tmp/', out + '/') for w in words]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60)
     path = re.search(r"path: '([^']*)'", ' '.join(command))
-    written = path and os.path.exists(path.group(1)) and any(
-        not line.startswith('#') for line in open(path.group(1)))
+    if path and 'save_map' in words[2]:  # a map file: its magic (doc/map_file.md)
+        written = os.path.exists(path.group(1)) and \
+            open(path.group(1), 'rb').read(8) == b'SDSMAP\r\n'
+    else:  # keyframes, TUM
+        written = path and os.path.exists(path.group(1)) and any(
+            not line.startswith('#') for line in open(path.group(1)))
     check(where, result.returncode == 0 and 'success: True' in result.stdout and bool(written),
           '`%s` during bag.launch: %s' % (' '.join(words), result.stdout.strip().replace('\n', '; ')))
 
