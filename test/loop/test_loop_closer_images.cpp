@@ -47,7 +47,7 @@ TEST(LoopCloserImages, EachKeyframeImageIsStoredInABufferOfItsOwnSize) {
     EXPECT_EQ(jpeg.capacity(), jpeg.size()) << id;
     const cv::Mat decoded = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
     ASSERT_EQ(decoded.size(), images[id].size()) << id;
-    // The keyframe's own image (quality 95: a grey level or two off on average), not another's.
+    // The keyframe's own image (JPEG: a grey level or two off on average), not another's.
     EXPECT_LT(cv::norm(decoded, images[id], cv::NORM_L1) / images[id].total(), 3.0) << id;
     if (id > 0)
       EXPECT_GT(cv::norm(decoded, images[id - 1], cv::NORM_L1) / images[id].total(), 10.0);
