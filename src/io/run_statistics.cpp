@@ -7,6 +7,8 @@
 #include <numeric>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace scale_drift_slam::io {
 
 double percentile(std::vector<double> values, double q) {
@@ -68,6 +70,13 @@ double peakMemoryMiB() {
     }
   }
   return 0.0;
+}
+
+double residentMemoryMiB() {
+  std::ifstream statm("/proc/self/statm");
+  double pages_total = 0.0, pages_resident = 0.0;
+  if (!(statm >> pages_total >> pages_resident)) return 0.0;
+  return pages_resident * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
 }  // namespace scale_drift_slam::io

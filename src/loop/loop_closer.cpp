@@ -99,9 +99,11 @@ void LoopCloser::restore(
 void LoopCloser::storeKeyframe(const map::KeyframeMessage& message) {
   map::addKeyframeMessage(message, map_);
   if (!message.image.empty()) {
-    std::vector<std::uint8_t>& jpeg = jpeg_images_[message.keyframe.id];
-    cv::imencode(".jpg", message.image, jpeg,
+    // imencode grows its buffer by doubling and leaves it so (up to twice the JPEG's size): each
+    // stored image gets a buffer of exactly its size, the scratch buffer is reused.
+    cv::imencode(".jpg", message.image, jpeg_scratch_,
                  {cv::IMWRITE_JPEG_QUALITY, params_.image_jpeg_quality});
+    jpeg_images_[message.keyframe.id].assign(jpeg_scratch_.begin(), jpeg_scratch_.end());
   }
 }
 
@@ -154,8 +156,12 @@ LoopDetection LoopCloser::addKeyframe(map::KeyframeMessage message) {
   const common::Stopwatch timer;
   KeyframeAppearance features = extractor_.extract(message.image, camera_.get());
   if (params_.enabled) {
+    const common::Stopwatch query_timer;
+    const double cpu_start = common::threadCpuMs();
     detection.recognition =
         recognizer_.query(id, message.keyframe.timestamp, features, covisibleKeyframes(id));
+    detection.query_cpu_ms = common::threadCpuMs() - cpu_start;
+    detection.query_ms = query_timer.ms();
   } else {
     detection.recognition.skip_reason = "loop closure disabled";
   }

@@ -82,6 +82,7 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
 map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
                                  LoopCorrectionStatistics* statistics) {
   const common::Stopwatch timer;
+  const double cpu_start = common::threadCpuMs();
   LoopCorrectionStatistics stats;
   stats.constraint = constraint;
   stats.mode = params_.loop_correction.graph.mode;
@@ -107,6 +108,7 @@ map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,
   corrections_.record(update);
   stats.applied = true;
   stats.total_ms = timer.ms();
+  stats.total_cpu_ms = common::threadCpuMs() - cpu_start;
   if (statistics) *statistics = stats;
   return update;
 }

@@ -7,7 +7,8 @@
 // city_block: one loop clockwise round a 110 m x 75 m block (~320 m), started in the middle of
 // the west street, then on 37 m (11 % of the loop) past the start so that the loop must be closed.
 // city_loop: a 330 m x 160 m loop round six blocks, then a second, smaller loop that re-drives
-// the first loop's west and south streets in the same direction (~1.6 km in all).
+// the first loop's west and south streets in the same direction (~1.6 km in all); with laps > 1
+// the whole route again from its south-west corner, as often (scripts/bench city).
 
 #include <cmath>
 
@@ -71,7 +72,7 @@ Scenario makeCityBlock(std::uint32_t seed) {
   return scenario;
 }
 
-Scenario makeCityLoop(std::uint32_t seed) {
+Scenario makeCityLoop(std::uint32_t seed, int laps) {
   Scenario scenario;
   scenario.name = "city_loop";
   scenario.description =
@@ -83,9 +84,16 @@ Scenario makeCityLoop(std::uint32_t seed) {
   grid.block_i1 = 4;
   grid.block_j0 = -1;
   grid.block_j1 = 3;
-  const std::vector<Eigen::Vector2d> streets = {
-      grid.node(0, 0.5), grid.node(0, 2), grid.node(3, 2), grid.node(3, 0), grid.node(0, 0),
-      grid.node(0, 1),   grid.node(2, 1), grid.node(2, 0), grid.node(0, 0), grid.node(0, 0.9)};
+  // One lap: from the middle of the west street round both loops back to the south-west corner.
+  // Each further lap drives on north from there through the start; the route ends past it.
+  const std::vector<Eigen::Vector2d> lap = {grid.node(0, 2), grid.node(3, 2), grid.node(3, 0),
+                                            grid.node(0, 0), grid.node(0, 1), grid.node(2, 1),
+                                            grid.node(2, 0), grid.node(0, 0)};
+  std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5)};
+  for (int i = 0; i < laps; ++i)
+    streets.insert(streets.end(), lap.begin(), lap.end());
+  streets.push_back(grid.node(0, 0.9));
+  if (laps > 1) scenario.description += ", driven " + std::to_string(laps) + " times";
   buildCity(scenario.scene, grid, streets, seed);
   addDrive(scenario, streets, seed);
   return scenario;

@@ -59,6 +59,7 @@ void SequenceParams::validate() const {
           "distortion must be none, radtan, tum_fr1 or fisheye, not '" + distortion + "'");
   require(max_frames >= 0, "the number of frames must be >= 0");
   require(start_fraction >= 0.0 && start_fraction < 1.0, "start fraction must be in [0, 1)");
+  require(laps >= 1 && laps <= 100, "laps must be in [1, 100]");
   require(std::isfinite(start_time) && start_time >= 0 && start_time < 4e9,
           "start time must be in [0, 4e9) s");
   realism.validate();
@@ -95,10 +96,10 @@ geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
 
 SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(params) {
   params_.validate();
-  scenario_ = makeScenario(params_.scene, params_.scene_seed.value_or(params_.seed));
+  scenario_ = makeScenario(params_.scene, params_.scene_seed.value_or(params_.seed), params_.laps);
   if (params_.scene_seed && *params_.scene_seed != params_.seed) {
     // The same place, walked with another wobble: the motion of the scenario of `seed`.
-    scenario_.T_world_cam = makeScenario(params_.scene, params_.seed).T_world_cam;
+    scenario_.T_world_cam = makeScenario(params_.scene, params_.seed, params_.laps).T_world_cam;
   }
   if (params_.start_fraction > 0.0) {
     const double offset = params_.start_fraction * scenario_.duration;

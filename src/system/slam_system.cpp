@@ -58,7 +58,11 @@ void SlamSystem::finish() {
 tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& image,
                                                features::PixelEncoding encoding) {
   started_ = true;
+  const common::Stopwatch inbox_timer;
+  const double inbox_cpu_start = common::threadCpuMs();
   drainInbox();
+  last_inbox_cpu_ms_ = common::threadCpuMs() - inbox_cpu_start;
+  last_inbox_ms_ = inbox_timer.ms();
   const int mono16_bits = tracker_.mono16BitDepth();
   tracking::FrameResult result = tracker_.processFrame(timestamp, image, encoding);
   if (tracker_.mono16BitDepth() != mono16_bits) log(tracker_.describeMono16BitDepth());
@@ -174,6 +178,8 @@ void SlamSystem::handle(LoopInput input) {
     {
       std::lock_guard<std::mutex> lock(record_mutex_);
       times_.place_recognition_ms.push_back(detection.recognition_ms);
+      times_.place_query_ms.push_back(detection.query_ms);
+      times_.place_query_cpu_ms.push_back(detection.query_cpu_ms);
       if (detection.verification) times_.verification_ms.push_back(detection.verification_ms);
     }
     if (detection.verification || !detection.recognition.candidates.empty()) {

@@ -29,6 +29,7 @@ const char* kUsage =
     "  --scene-seed N           the scene's textures from N, the wobble and noise from --seed\n"
     "                           (another pass through the same place; default: --seed)\n"
     "  --start-fraction F       start F (in [0, 1)) along the trajectory (default 0)\n"
+    "  --laps N                 drive the route N times (city_loop only; default 1)\n"
     "  --frames N               render only the first N frames (default: the whole trajectory)\n"
     "  --fps HZ                 frame rate (default: the scene's, 30; city_*: 10)\n"
     "  --width W --height H     image size (default: the scene's, 640 x 480; city_*: 1241 x 376)\n"
@@ -70,6 +71,9 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
     p.scene_seed = static_cast<std::uint32_t>(scene_seed);
   }
   p.start_fraction = cl.number("start-fraction", 0.0);
+  const long laps = cl.integer("laps", 1);
+  if (laps < 1 || laps > 100) throw std::invalid_argument("--laps must be in [1, 100]");
+  p.laps = static_cast<int>(laps);
   const long frames = cl.integer("frames", 0);
   if (frames < 0 || frames > 10000000) throw std::invalid_argument("--frames must be >= 0");
   p.max_frames = static_cast<int>(frames);
@@ -121,6 +125,7 @@ int run(const sds::io::CommandLine& cl) {
                          "seed",
                          "scene-seed",
                          "start-fraction",
+                         "laps",
                          "frames",
                          "fps",
                          "width",

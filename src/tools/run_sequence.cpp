@@ -136,6 +136,8 @@ void addBackgroundTimes(const system::SlamSystem& slam, io::StageTimings* timing
     timings->add("window_ba", ms);
   for (const double ms : times.place_recognition_ms)
     timings->add("place_recognition", ms);
+  for (const double ms : times.place_query_ms)
+    timings->add("place_query", ms);
   for (const double ms : times.verification_ms)
     timings->add("loop_verification", ms);
   for (const double ms : times.relocalisation_ms)
@@ -143,6 +145,15 @@ void addBackgroundTimes(const system::SlamSystem& slam, io::StageTimings* timing
   for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
     if (loop.applied) timings->add("loop_correction", loop.total_ms);
   }
+}
+
+/// The background work per keyframe, in the order the keyframes came (to see costs that grow).
+nlohmann::json perKeyframeJson(const system::SlamSystem& slam) {
+  const system::BackgroundTimes times = slam.backgroundTimes();
+  return {{"window_ba", times.window_ba_ms},
+          {"place_recognition", times.place_recognition_ms},
+          {"place_query", times.place_query_ms},
+          {"place_query_cpu", times.place_query_cpu_ms}};
 }
 
 /// The keyframes just before the n-th applied loop's correction (TUM), in the output folder.
@@ -176,6 +187,7 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
                      {"graph_ms", loop.graph_ms},
                      {"structure_only_ba_ms", loop.structure_ms},
                      {"correction_ms", loop.total_ms},
+                     {"correction_cpu_ms", loop.total_cpu_ms},
                      {"correction_scale_at_current", loop.current_correction_scale},
                      {"graph_build_ms", loop.build_ms},
                      {"map_correction_ms", loop.correction_ms},
@@ -190,14 +202,25 @@ std::ofstream openFrameLog(const fs::path& path) {
   std::ofstream file(path);
   if (!file) throw std::runtime_error("cannot write '" + path.string() + "'");
   file << "frame,timestamp,state,map,rejected,visible,found,inliers,keyframes,new_points,"
-          "candidates,relocalised,message\n";
+          "candidates,relocalised,tracking_cpu_ms,frame_ms,frame_cpu_ms,inbox_ms,inbox_cpu_ms,"
+          "mapper_backlog,rss_mib,"
+          "message\n";
   return file;
 }
+
+/// The load of one frame: its call's wall and CPU time, the part spent applying map updates, the
+/// keyframes waiting for the mapper after it and the process's resident memory.
+struct FrameLoad {
+  double frame_ms = 0.0, frame_cpu_ms = 0.0;  ///< Wall and tracking-thread CPU time.
+  double inbox_ms = 0.0, inbox_cpu_ms = 0.0;
+  std::size_t mapper_backlog = 0;
+  double rss_mib = 0.0;
+};
 
 /// `candidates`: feature candidates alive after the frame (tracking::Tracker::numCandidates).
 /// `map`: the map the frame belongs to (0, then one more at each young map discarded).
 void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameResult& r, int map,
-              std::size_t candidates, std::ofstream* file) {
+              std::size_t candidates, const FrameLoad& load, std::ofstream* file) {
   std::string message = r.message;
   std::replace(message.begin(), message.end(), '"', '\'');
   std::size_t new_points = 0;
@@ -206,7 +229,10 @@ void logFrame(int index, const io::SequenceFrame& frame, const tracking::FrameRe
   *file << index << ',' << std::fixed << std::setprecision(6) << frame.timestamp << ','
         << trackingStateName(r.state) << ',' << map << ',' << r.rejected << ',' << r.num_visible
         << ',' << r.num_found << ',' << r.num_inliers << ',' << r.keyframes.size() << ','
-        << new_points << ',' << candidates << ',' << r.relocalised << ",\"" << message << "\"\n";
+        << new_points << ',' << candidates << ',' << r.relocalised << ',' << std::setprecision(3)
+        << r.times.cpu << ',' << load.frame_ms << ',' << load.frame_cpu_ms << ',' << load.inbox_ms
+        << ',' << load.inbox_cpu_ms << ',' << load.mapper_backlog << ',' << std::setprecision(1)
+        << load.rss_mib << ",\"" << message << "\"\n";
 }
 
 /// What run_sequence was asked to do.
@@ -279,7 +305,9 @@ RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
     if (!frame) break;
     ++tally.frames;
     const common::Stopwatch frame_timer;
+    const double frame_cpu_start = common::threadCpuMs();
     const tracking::FrameResult r = processOne(slam, *frame);
+    const double frame_cpu_ms = common::threadCpuMs() - frame_cpu_start;
     // What the camera sees: the whole call, with map updates applied (and the window BA when
     // the mapper runs inline).
     const double frame_ms = frame_timer.ms();
@@ -298,7 +326,13 @@ RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
       tally.as_tracked[map].push_back({frame->timestamp, r.T_cam_world.inverse()});
       ++tally.tracked;
     }
-    logFrame(tally.frames - 1, *frame, r, map, slam.tracker().numCandidates(), &frame_log);
+    const FrameLoad load{frame_ms,
+                         frame_cpu_ms,
+                         slam.lastInboxMs(),
+                         slam.lastInboxCpuMs(),
+                         slam.mapperBacklog(),
+                         io::residentMemoryMiB()};
+    logFrame(tally.frames - 1, *frame, r, map, slam.tracker().numCandidates(), load, &frame_log);
     for (const std::string& line : slam.takeLog())
       std::cout << (progress ? "\n" : "") << line << "\n";
     if (progress && (tally.frames % 10 == 0 || tally.frames == static_cast<int>(total))) {
@@ -401,29 +435,30 @@ void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
                       const std::vector<std::string>& dataset_warnings, double startup_ms,
                       double peak_mib) {
   const std::string& dataset = options.dataset;
-  const nlohmann::json summary = {{"dataset", dataset},
-                                  {"frames", tally.frames},
-                                  {"rejected_frames", tally.rejected},
-                                  {"tracked", tally.tracked},
-                                  {"tracked_final_map", outputs.maps.back()["tracked"]},
-                                  {"maps", outputs.maps},
-                                  {"rejections", tally.rejections},
-                                  {"dataset_warnings", dataset_warnings},
-                                  {"output_warnings", outputs.notes},
-                                  {"nothing_tracked", nothingTrackedReason(tally)},
-                                  {"states", tally.states},
-                                  {"keyframes", slam.map().numKeyframes()},
-                                  {"points", slam.map().numPoints()},
-                                  {"observations", slam.map().numObservations()},
-                                  {"loops", loopsJson(slam)},
-                                  {"relocalisations", slam.relocalisations()},
-                                  {"map_restarts", slam.mapRestarts()},
-                                  {"loaded_map_keyframes", slam.restoredKeyframes()},
-                                  {"keyframes_added",
-                                   slam.map().numKeyframes() - slam.restoredKeyframes()},
-                                  {"timing", tally.timings.toJson()},
-                                  {"startup_ms", startup_ms},
-                                  {"peak_memory_mib", peak_mib}};
+  const nlohmann::json summary = {
+      {"dataset", dataset},
+      {"frames", tally.frames},
+      {"rejected_frames", tally.rejected},
+      {"tracked", tally.tracked},
+      {"tracked_final_map", outputs.maps.back()["tracked"]},
+      {"maps", outputs.maps},
+      {"rejections", tally.rejections},
+      {"dataset_warnings", dataset_warnings},
+      {"output_warnings", outputs.notes},
+      {"nothing_tracked", nothingTrackedReason(tally)},
+      {"states", tally.states},
+      {"keyframes", slam.map().numKeyframes()},
+      {"points", slam.map().numPoints()},
+      {"observations", slam.map().numObservations()},
+      {"loops", loopsJson(slam)},
+      {"relocalisations", slam.relocalisations()},
+      {"map_restarts", slam.mapRestarts()},
+      {"loaded_map_keyframes", slam.restoredKeyframes()},
+      {"keyframes_added", slam.map().numKeyframes() - slam.restoredKeyframes()},
+      {"timing", tally.timings.toJson()},
+      {"per_keyframe_ms", perKeyframeJson(slam)},
+      {"startup_ms", startup_ms},
+      {"peak_memory_mib", peak_mib}};
   std::ofstream(options.out / "summary.json") << summary.dump(2) << "\n";
 }
 

@@ -12,6 +12,7 @@
 #include "scale_drift_slam/io/calibration_io.h"
 #include "scale_drift_slam/io/trajectory_io.h"
 #include "scale_drift_slam/sim/renderer.h"
+#include "scale_drift_slam/sim/scenario.h"
 #include "scale_drift_slam/sim/sequence.h"
 #include "scale_drift_slam/sim/sequence_writer.h"
 
@@ -189,6 +190,44 @@ TEST(Sequence, DeskIsMostlyOnePlaneSeenThroughTheTumLensStillForTenFrames) {
   EXPECT_GT(sum / count, 0.08);
   EXPECT_LT(sum / count, 0.25);
   EXPECT_LT(most, 0.35);
+}
+
+/// Times the camera comes within `radius` metres (x-y) of where it started: maximal runs of
+/// samples every 0.1 s within the radius.
+int visitsOfTheStart(const Scenario& scenario, double radius) {
+  const Eigen::Vector2d start = scenario.T_world_cam(0.0).translation().head<2>();
+  int visits = 0;
+  bool near = false;
+  for (double t = 0.0; t <= scenario.duration; t += 0.1) {
+    const bool now = (scenario.T_world_cam(t).translation().head<2>() - start).norm() < radius;
+    if (now && !near) ++visits;
+    near = now;
+  }
+  return visits;
+}
+
+TEST(Sequence, CityLoopLapsDriveTheWholeRouteAgainInTheSameCity) {
+  const Scenario one = makeScenario("city_loop", 1);
+  const Scenario three = makeScenario("city_loop", 1, 3);
+  // The same city (the route covers the same streets), the same start.
+  EXPECT_EQ(three.scene.textureCount(), one.scene.textureCount());
+  EXPECT_LT((three.T_world_cam(0.0).translation() - one.T_world_cam(0.0).translation()).norm(),
+            1e-9);
+  // One lap passes its start three times (start, the second loop, the end past the start); each
+  // further lap twice more (the first loop's west street, then the second loop's).
+  EXPECT_EQ(visitsOfTheStart(one, 3.0), 3);
+  EXPECT_EQ(visitsOfTheStart(three, 3.0), 7);
+  // Both end a little past the start, heading north, in the same lane.
+  const Eigen::Vector3d end_one = one.T_world_cam(one.duration).translation();
+  const Eigen::Vector3d end_three = three.T_world_cam(three.duration).translation();
+  EXPECT_LT((end_one - end_three).head<2>().norm(), 0.5);
+  EXPECT_GT(three.duration, 2.8 * one.duration);
+  EXPECT_LT(three.duration, 3.2 * one.duration);
+  EXPECT_THROW(makeScenario("city_loop", 1, 0), std::invalid_argument);
+  EXPECT_THROW(makeScenario("city_block", 1, 2), std::invalid_argument);
+  SequenceParams params = smallParams("courtyard_loop");
+  params.laps = 2;
+  EXPECT_THROW(SequenceRenderer{params}, std::invalid_argument);
 }
 
 TEST(Sequence, BadParametersAreRefusedWithAReason) {

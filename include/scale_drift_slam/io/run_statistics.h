@@ -30,5 +30,7 @@ class StageTimings {
 
 /// The peak resident memory of this process (VmHWM of /proc/self/status) in MiB; 0 if unknown.
 double peakMemoryMiB();
+/// The resident memory of this process now (VmRSS, from /proc/self/statm) in MiB; 0 if unknown.
+double residentMemoryMiB();
 
 }  // namespace scale_drift_slam::io

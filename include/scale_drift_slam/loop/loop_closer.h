@@ -42,7 +42,7 @@ struct LoopCloserParams {
   /// follows decides). Defaults: the loop's check with min_inliers 30 and min_coverage 0.3.
   GeometricCheckParams relocalisation_geometry = relaxedGeometry();
   static GeometricCheckParams relaxedGeometry();
-  int image_jpeg_quality = 95;  ///< Of the stored keyframe images.
+  int image_jpeg_quality = 90;  ///< Of the stored keyframe images.
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -55,6 +55,8 @@ struct LoopDetection {
   std::optional<LoopVerification> verification;
   std::optional<LoopConstraint> constraint;
   double recognition_ms = 0.0;   ///< ORB extraction and the query.
+  double query_ms = 0.0;         ///< The query alone (its part of recognition_ms).
+  double query_cpu_ms = 0.0;     ///< The query's CPU time (unaffected by other processes).
   double verification_ms = 0.0;  ///< 0 when nothing was verified.
   /// One line for logs: the loop found, or why there is none.
   std::string describe() const;
@@ -110,6 +112,7 @@ class LoopCloser {
   std::uint64_t map_version_ = 0;  ///< Of the last MapUpdate applied.
   map::CorrectionHistory corrections_;
   std::unordered_map<map::KeyframeId, std::vector<std::uint8_t>> jpeg_images_;
+  std::vector<std::uint8_t> jpeg_scratch_;  ///< imencode's buffer, reused for every keyframe.
   int pyramid_levels_ = 2;
 };
 

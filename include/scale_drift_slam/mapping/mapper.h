@@ -71,6 +71,8 @@ struct LoopCorrectionStatistics {
   std::vector<std::pair<double, geometry::SE3>> keyframes_before;
   /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
   double build_ms = 0.0, graph_ms = 0.0, correction_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  /// The whole correction's CPU time on the mapping thread (unaffected by other processes).
+  double total_cpu_ms = 0.0;
   /// Reprojection errors after the correction, before and after the structure-only BA.
   ReprojectionStats reprojection_before, reprojection_after;
   loop::PoseGraphMode mode = loop::PoseGraphMode::kSim3;

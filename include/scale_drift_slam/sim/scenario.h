@@ -30,8 +30,10 @@ struct Scenario {
 /// city_loop, facade_grid.
 std::vector<std::string> scenarioNames();
 /// Builds a scenario; textures (and the small hand-held wobble) depend on the seed only.
-/// Throws std::invalid_argument naming the known scenes for an unknown name.
-Scenario makeScenario(const std::string& name, std::uint32_t seed);
+/// Throws std::invalid_argument naming the known scenes for an unknown name. `laps` (in [1, 100];
+/// city_loop only, else std::invalid_argument): the route driven that many times, in the same
+/// city (the benchmark's long run, scripts/bench city).
+Scenario makeScenario(const std::string& name, std::uint32_t seed, int laps = 1);
 
 /// The default image size (width, height) of a named scene, known without building it: 1241 x 376
 /// (KITTI-like) for the city_* driving scenes, 640 x 480 for the others.

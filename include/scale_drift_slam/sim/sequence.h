@@ -62,6 +62,7 @@ struct SequenceParams {
   /// The first frame is this far along the trajectory (a share of its duration, in [0, 1)); the
   /// sequence is that much shorter.
   double start_fraction = 0.0;
+  int laps = 1;  ///< The route driven this many times (city_loop only; makeScenario()).
   RealismParams realism;
   void validate() const;  ///< Throws std::invalid_argument with the reason.
 };

@@ -41,6 +41,8 @@ namespace scale_drift_slam::system {
 struct BackgroundTimes {
   std::vector<double> window_ba_ms;          ///< Per keyframe.
   std::vector<double> place_recognition_ms;  ///< Per keyframe: ORB extraction and query.
+  std::vector<double> place_query_ms;        ///< Per keyframe: the query alone.
+  std::vector<double> place_query_cpu_ms;    ///< Per keyframe: the query's CPU time.
   std::vector<double> verification_ms;       ///< Per verified candidate.
   std::vector<double> relocalisation_ms;     ///< Per request.
 };
@@ -81,6 +83,13 @@ class SlamSystem {
   std::vector<mapping::LoopCorrectionStatistics> loops() const;
   BackgroundTimes backgroundTimes() const;
   int relocalisations() const;
+  /// Keyframes waiting in the mapper's queue now (the window BA's backlog; 0 when it keeps up).
+  std::size_t mapperBacklog() const { return mapper_inbox_.size(); }
+  /// Milliseconds the last processFrame() spent applying what arrived for the tracker (map
+  /// updates, loop corrections, relocalisation answers) before tracking the frame.
+  double lastInboxMs() const { return last_inbox_ms_; }
+  /// The same in CPU time of the calling (tracking) thread.
+  double lastInboxCpuMs() const { return last_inbox_cpu_ms_; }
   /// Young lost maps the tracker discarded to initialise again.
   int mapRestarts() const { return map_restarts_; }
   /// The trajectories of the discarded maps (map 0, 1, ...), as corrected until each was
@@ -127,6 +136,7 @@ class SlamSystem {
   int map_restarts_ = 0;
   std::size_t restored_keyframes_ = 0;
   bool started_ = false;  ///< A frame was processed.
+  double last_inbox_ms_ = 0.0, last_inbox_cpu_ms_ = 0.0;
   std::thread mapping_thread_, loop_thread_;
   bool finished_ = false;
 };
