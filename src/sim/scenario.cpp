@@ -12,15 +12,19 @@ std::vector<std::string> scenarioNames() {
           "office_pan",     "city_block",   "city_loop",         "facade_grid"};
 }
 
-Scenario makeScenario(const std::string& name, std::uint32_t seed) {
+Scenario makeScenario(const std::string& name, std::uint32_t seed, const ScenarioOptions& options) {
+  if (name == "city_block") return detail::makeCityBlock(seed, options);
+  if (name == "city_loop") return detail::makeCityLoop(seed, options);
+  if (options.traffic) {
+    throw std::invalid_argument("traffic needs streets: only the city_* scenes have it, not '" +
+                                name + "'");
+  }
   if (name == "courtyard_loop") return detail::makeCourtyardLoop(seed);
   if (name == "office_orbit") return detail::makeOfficeOrbit(seed);
   if (name == "corridor_straight") return detail::makeCorridorStraight(seed);
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
   if (name == "desk") return detail::makeDesk(seed);
   if (name == "office_pan") return detail::makeOfficePan(seed);
-  if (name == "city_block") return detail::makeCityBlock(seed);
-  if (name == "city_loop") return detail::makeCityLoop(seed);
   if (name == "facade_grid") return detail::makeFacadeGrid(seed);
   std::string known;
   for (const std::string& n : scenarioNames())

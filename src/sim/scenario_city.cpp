@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "city_route.h"
+#include "city_traffic.h"
 #include "city_world.h"
 #include "scenario_builders.h"
 
@@ -53,7 +54,7 @@ void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, s
 
 }  // namespace
 
-Scenario makeCityBlock(std::uint32_t seed) {
+Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options) {
   Scenario scenario;
   scenario.name = "city_block";
   scenario.description = "forward-looking car camera, one loop round a 110 m x 75 m city block";
@@ -67,11 +68,12 @@ Scenario makeCityBlock(std::uint32_t seed) {
                                                 grid.node(1, 1),   grid.node(1, 0),
                                                 grid.node(0, 0),   grid.node(0, 1.0)};
   buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
   return scenario;
 }
 
-Scenario makeCityLoop(std::uint32_t seed) {
+Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options) {
   Scenario scenario;
   scenario.name = "city_loop";
   scenario.description =
@@ -87,7 +89,8 @@ Scenario makeCityLoop(std::uint32_t seed) {
       grid.node(0, 0.5), grid.node(0, 2), grid.node(3, 2), grid.node(3, 0), grid.node(0, 0),
       grid.node(0, 1),   grid.node(2, 1), grid.node(2, 0), grid.node(0, 0), grid.node(0, 0.9)};
   buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
   return scenario;
 }
 

@@ -62,6 +62,8 @@ struct SequenceParams {
   /// The first frame is this far along the trajectory (a share of its duration, in [0, 1)); the
   /// sequence is that much shorter.
   double start_fraction = 0.0;
+  /// Moving cars in the streets (city_* scenes): from `seed`, clear of the camera's drive.
+  bool traffic = false;
   RealismParams realism;
   void validate() const;  ///< Throws std::invalid_argument with the reason.
 };
