@@ -30,6 +30,7 @@ struct Car {
   double t_end = std::numeric_limits<double>::infinity();
   Eigen::Vector3d size;
   int first_surface = 0;  ///< Its box: 5 surfaces from here.
+  int kind = 0;           ///< Placed in this order: 0 merging, 1 crossing, 2 oncoming.
 };
 
 MovingObject carAt(const Car& car, double t) {
@@ -193,6 +194,10 @@ std::shared_ptr<const CityRoute> laneRoute(const std::vector<Eigen::Vector2d>& c
   DriveParams params;
   params.cruise_speed_min = 8.5;
   params.cruise_speed_max = 13.5;
+  // Tighter than the camera's car (9-13 m): a footprint on an arc of at most 9 m from the right
+  // lane keeps clear of the kerb's corner.
+  params.turn_radius_min = 6.0;
+  params.turn_radius_max = 9.0;
   return std::make_shared<const CityRoute>(offsetRight(centre, kLaneOffset), params,
                                            static_cast<unsigned>(rng.next()));
 }
@@ -215,8 +220,9 @@ std::vector<Eigen::Vector2d> streetsFrom(const std::vector<Eigen::Vector2d>& str
 std::vector<Car> candidates(const Scenario& scenario, const CityGrid& grid,
                             const std::vector<Eigen::Vector2d>& streets, cv::RNG& rng) {
   std::vector<Car> cars;
-  auto add = [&](std::shared_ptr<const CityRoute> route, double t0) {
+  auto add = [&](std::shared_ptr<const CityRoute> route, double t0, int kind) {
     Car car;
+    car.kind = kind;
     car.route = std::move(route);
     car.t0 = t0;
     cars.push_back(car);
@@ -229,7 +235,7 @@ std::vector<Car> candidates(const Scenario& scenario, const CityGrid& grid,
   const int oncoming = static_cast<int>(scenario.duration / 3.0);
   for (int k = 0; k < oncoming; ++k) {
     auto route = laneRoute(backwards, rng);
-    add(route, rng.uniform(-route->duration(), scenario.duration));
+    add(route, rng.uniform(-route->duration(), scenario.duration), 2);
   }
   for (const Junction& junction : routeJunctions(scenario, grid, streets)) {
     for (int k = 0; k < 4; ++k) {  // crossing: along either axis, either way
@@ -237,7 +243,7 @@ std::vector<Car> candidates(const Scenario& scenario, const CityGrid& grid,
       const Eigen::Vector2d dir = k % 2 == 0 ? d : Eigen::Vector2d(-d);
       auto route =
           laneRoute({junction.node - kSideStreet * dir, junction.node + kSideStreet * dir}, rng);
-      add(route, junction.time + rng.uniform(-7.0, 7.0) - route->duration() / 2);
+      add(route, junction.time + rng.uniform(-7.0, 7.0) - route->duration() / 2, 1);
     }
     // Merging: from either side street, or straight on from behind into the camera's way on.
     const Eigen::Vector2d side = perpendicular(junction.out);
@@ -248,10 +254,13 @@ std::vector<Car> candidates(const Scenario& scenario, const CityGrid& grid,
         path.push_back(p);
       if (path.size() < 3 || (path[1] - junction.node).norm() > 1.0) continue;
       if ((path[2] - path[1]).normalized().dot(from) > 0.5) continue;  // no U-turns
-      auto route = laneRoute(path, rng);
-      add(route, junction.time - rng.uniform(3.0, 8.0) - kSideStreet / 10.0);
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        add(laneRoute(path, rng), junction.time - rng.uniform(3.0, 8.0) - kSideStreet / 10.0, 0);
+      }
     }
   }
+  std::stable_sort(cars.begin(), cars.end(),
+                   [](const Car& a, const Car& b) { return a.kind < b.kind; });
   return cars;
 }
 
