@@ -36,6 +36,7 @@ struct Car {
 MovingObject carAt(const Car& car, double t) {
   MovingObject object;
   object.size = car.size;
+  object.first_surface = car.first_surface;
   object.present = t >= car.t_begin && t <= car.t_end;
   const CityRoute::State state = car.route->atTime(t - car.t0);
   object.position = state.position;
@@ -80,11 +81,10 @@ struct Blocks {
   }
 };
 
-/// Whether the camera cannot see any of the car: it is behind the camera, far away or behind
-/// buildings.
+/// Whether the camera cannot see any of the car: it is behind the camera or behind buildings
+/// (not merely far: a car 130 m down a street still covers some 10 x 6 pixels).
 bool hiddenFrom(const MovingObject& ego, const MovingObject& car, const Blocks& blocks) {
   const Eigen::Vector2d camera = ego.position + kEgoBehindCamera * ego.heading;
-  if ((car.position - camera).norm() > kFarAway) return true;
   const Eigen::Vector2d along = 0.5 * car.size.x() * car.heading;
   const Eigen::Vector2d across = 0.5 * car.size.y() * perpendicular(car.heading);
   for (const double a : {-1.0, 1.0}) {
@@ -120,18 +120,20 @@ bool lifetime(const Scenario& scenario, const Blocks& blocks, Car& car, double n
     hidden[k] = hiddenFrom(ego, object, blocks);
   }
   if (closest > near) return false;
+  // In the world from a pair of hidden samples to a pair: the first and the last frame that
+  // holds the car, whatever the frame times, see it hidden.
   size_t first = key, last = key;
-  while (first > 0 && !hidden[first])
+  while (first > 0 && !(hidden[first] && first + 1 < times.size() && hidden[first + 1]))
     --first;
-  while (last + 1 < times.size() && !hidden[last])
+  while (last + 1 < times.size() && !(hidden[last] && last > 0 && hidden[last - 1]))
     ++last;
-  if (!hidden[first]) {
+  if (!(hidden[first] && first + 1 < times.size() && hidden[first + 1])) {
     if (car.t0 > 0.0) return false;  // would appear at its route's start in sight
     car.t_begin = -std::numeric_limits<double>::infinity();
   } else {
     car.t_begin = times[first];
   }
-  if (!hidden[last]) {
+  if (!(hidden[last] && last > 0 && hidden[last - 1])) {
     if (car.t0 + car.route->duration() < scenario.duration) return false;
     car.t_end = std::numeric_limits<double>::infinity();
   } else {
@@ -254,8 +256,8 @@ std::vector<Car> candidates(const Scenario& scenario, const CityGrid& grid,
         path.push_back(p);
       if (path.size() < 3 || (path[1] - junction.node).norm() > 1.0) continue;
       if ((path[2] - path[1]).normalized().dot(from) > 0.5) continue;  // no U-turns
-      for (int attempt = 0; attempt < 3; ++attempt) {
-        add(laneRoute(path, rng), junction.time - rng.uniform(3.0, 8.0) - kSideStreet / 10.0, 0);
+      for (int attempt = 0; attempt < 6; ++attempt) {
+        add(laneRoute(path, rng), junction.time - rng.uniform(2.0, 10.0) - kSideStreet / 10.0, 0);
       }
     }
   }

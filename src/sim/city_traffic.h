@@ -6,7 +6,7 @@
 // camera's route backwards in the other lane, crossing cars go straight over the junctions the
 // camera passes, merging cars come out of a side street (or the street ahead) and turn into the
 // camera's street ahead of it. A car is in the world from a moment where the camera cannot see it
-// (behind the camera, farther than kFarAway, or behind a block's buildings) to the next such
+// (behind the camera or behind a block's buildings) to the next such
 // moment after it came closest to the camera, so cars never pop up in view. Candidates whose
 // footprint (with a margin) would touch the camera's car or a car already placed at any time
 // both are in the world are dropped. Everything follows from the seed.
@@ -21,8 +21,6 @@
 
 namespace scale_drift_slam::sim::detail {
 
-/// Farther than this a car may come or go (metres).
-constexpr double kFarAway = 130.0;
 /// The camera's car: its footprint's centre is this far behind the camera (metres), its size.
 constexpr double kEgoBehindCamera = 1.2;
 constexpr double kEgoLength = 4.5, kEgoWidth = 1.8;

@@ -167,5 +167,41 @@ TEST(Traffic, CarsAreDrawnWhereTheyAre) {
   EXPECT_EQ(checked, 3);
 }
 
+TEST(Traffic, CarsComeAndGoOutOfSight) {
+  for (const std::uint32_t seed : {1u, 2u}) {
+    SCOPED_TRACE(seed);
+    Scenario traffic = cityWithTraffic(seed);
+    SequenceParams params;
+    params.width = 620;
+    params.height = 188;
+    const auto camera =
+        geometry::makeCameraModel(sequenceCalibration(params, traffic.horizontal_fov_deg));
+    Renderer renderer(*camera);
+    cv::Mat image;
+    int transitions = 0;
+    std::vector<MovingObject> before = traffic.moving_objects(0.0);
+    for (double t = 0.1; t <= traffic.duration; t += 0.1) {
+      const std::vector<MovingObject> now = traffic.moving_objects(t);
+      for (size_t i = 0; i < now.size(); ++i) {
+        if (now[i].present == before[i].present) continue;
+        // Rendered at the moment it is in the world (just after coming, just before going):
+        // none of its surfaces is seen.
+        const double at = now[i].present ? t : t - 0.1;
+        traffic.animate(at, traffic.scene);
+        renderer.render(traffic.scene, traffic.T_world_cam(at).inverse(), image);
+        const cv::Mat& index = renderer.surfaceIndex();
+        int seen = 0;
+        for (int k = 0; k < 5; ++k)
+          seen += cv::countNonZero(index == now[i].first_surface + k);
+        EXPECT_EQ(seen, 0) << "car " << i << (now[i].present ? " comes" : " goes") << " in view at "
+                           << at;
+        ++transitions;
+      }
+      before = now;
+    }
+    EXPECT_GT(transitions, 10);
+  }
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::sim

@@ -20,6 +20,7 @@ struct MovingObject {
   Eigen::Vector2d position;  ///< Centre of its footprint (world x-y, metres).
   Eigen::Vector2d heading;   ///< Unit direction it faces (its length axis).
   Eigen::Vector3d size;      ///< Length (along heading), width, height (metres).
+  int first_surface = -1;    ///< Its surfaces in Scenario::scene: a box, 5 from here.
 };
 
 /// What a scenario holds besides its fixed world.
