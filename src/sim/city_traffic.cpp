@@ -51,7 +51,7 @@ Eigen::Vector2d perpendicular(const Eigen::Vector2d& d) {
 /// The parts of the blocks that the buildings fill (seen from the street, opaque to sight).
 struct Blocks {
   std::vector<Eigen::Vector2d> low, high;
-  Blocks(const CityGrid& grid) {
+  explicit Blocks(const CityGrid& grid) {
     const double inset = grid.road_half_width + kBuildingInset;
     for (int i = grid.block_i0; i < grid.block_i1; ++i) {
       for (int j = grid.block_j0; j < grid.block_j1; ++j) {
