@@ -1,14 +1,68 @@
 #include "scale_drift_slam/mapping/mapper.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/loop/map_correction.h"
 #include "scale_drift_slam/loop/pose_graph_builder.h"
 
 namespace scale_drift_slam::mapping {
+namespace {
+
+/// A point this many times farther from its reference keyframe than that keyframe's median point
+/// depth has run away: its rays are (nearly) parallel, as for a point on a car driving with the
+/// camera, and the bundle adjustments push it towards infinity (one at 2.7e7 map units made the
+/// loop closer and the tracker refuse a whole loop correction on city_loop with traffic).
+constexpr double kRunawayDepthRatio = 50.0;
+
+double medianDepth(const map::Map& map, const map::Keyframe& keyframe) {
+  std::vector<double> depths;
+  depths.reserve(keyframe.observations.size());
+  for (const map::Observation& o : keyframe.observations) {
+    if (map.hasPoint(o.point_id))
+      depths.push_back((keyframe.T_kf_world * map.point(o.point_id).p_world).z());
+  }
+  if (depths.empty()) return 0.0;
+  std::nth_element(depths.begin(), depths.begin() + static_cast<long>(depths.size() / 2),
+                   depths.end());
+  return depths[depths.size() / 2];
+}
+
+/// Removes the run-away points among `ids` from the map and lists them in the update (the
+/// tracker and the loop closer drop them too); their positions are taken out of the update.
+void removeRunawayPoints(map::Map& map, const std::vector<map::PointId>& ids,
+                         map::MapUpdate& update) {
+  std::unordered_map<map::KeyframeId, double> median;
+  for (const map::PointId id : ids) {
+    if (!map.hasPoint(id)) continue;
+    const map::MapPoint& point = map.point(id);
+    if (!map.hasKeyframe(point.reference_keyframe)) continue;
+    const map::Keyframe& keyframe = map.keyframe(point.reference_keyframe);
+    auto it = median.find(keyframe.id);
+    if (it == median.end()) it = median.emplace(keyframe.id, medianDepth(map, keyframe)).first;
+    const double depth = (keyframe.T_kf_world * point.p_world).norm();
+    if (it->second > 0.0 && depth > kRunawayDepthRatio * it->second)
+      update.removed_points.push_back(id);
+  }
+  if (update.removed_points.empty()) return;
+  std::sort(update.removed_points.begin(), update.removed_points.end());
+  for (const map::PointId id : update.removed_points)
+    map.removePoint(id);
+  auto removed = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
+    return std::binary_search(update.removed_points.begin(), update.removed_points.end(),
+                              entry.first);
+  };
+  update.point_positions.erase(
+      std::remove_if(update.point_positions.begin(), update.point_positions.end(), removed),
+      update.point_positions.end());
+}
+
+}  // namespace
+
 std::string LoopCorrectionStatistics::describe() const {
   char text[400];
   const std::string loop =
@@ -71,9 +125,13 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
     for (const BundleKeyframe& kf : result.keyframes) {
       if (!kf.fixed) update.keyframe_poses.emplace_back(kf.id, kf.T_kf_world);
     }
+    std::vector<map::PointId> moved;
     for (const BundlePoint& p : result.points) {
-      if (!p.fixed) update.point_positions.emplace_back(p.id, p.p_world);
+      if (p.fixed) continue;
+      update.point_positions.emplace_back(p.id, p.p_world);
+      moved.push_back(p.id);
     }
+    removeRunawayPoints(map_, moved, update);
   }
   update.map_version = map_.version();
   return update;
@@ -168,8 +226,13 @@ map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
 
   for (const auto& [id, keyframe] : map_.keyframes())
     update.keyframe_poses.emplace_back(id, keyframe.T_kf_world);
-  for (const auto& [id, point] : map_.points())
+  std::vector<map::PointId> ids;
+  ids.reserve(map_.numPoints());
+  for (const auto& [id, point] : map_.points()) {
     update.point_positions.emplace_back(id, point.p_world);
+    ids.push_back(id);
+  }
+  removeRunawayPoints(map_, ids, update);
   map_.bumpVersion();
   update.map_version = map_.version();
   return update;

@@ -153,6 +153,7 @@ Eigen::Vector3f Renderer::ray(int x, int y) const {
 
 bool Renderer::prepare(const Surface& s, const Scene& scene, const Eigen::Matrix3d& R,
                        const Eigen::Vector3d& t, Prepared& out) const {
+  if (s.hidden) return false;
   const Eigen::Vector3d o = R * s.origin + t, e1 = R * s.edge1, e2 = R * s.edge2;
   Polygon polygon = {o, o + e1};
   if (s.shape == Surface::Shape::kParallelogram) polygon.push_back(o + e1 + e2);

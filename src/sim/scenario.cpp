@@ -12,11 +12,18 @@ std::vector<std::string> scenarioNames() {
           "office_pan",     "city_block",   "city_loop",         "facade_grid"};
 }
 
-Scenario makeScenario(const std::string& name, std::uint32_t seed, int laps) {
-  if (laps < 1 || laps > 100) throw std::invalid_argument("laps must be in [1, 100]");
-  if (laps != 1 && name != "city_loop") {
+Scenario makeScenario(const std::string& name, std::uint32_t seed, const ScenarioOptions& options) {
+  if (options.laps < 1 || options.laps > 100)
+    throw std::invalid_argument("laps must be in [1, 100]");
+  if (options.laps != 1 && name != "city_loop") {
     throw std::invalid_argument("only city_loop can be driven more than once (laps), not '" + name +
                                 "'");
+  }
+  if (name == "city_block") return detail::makeCityBlock(seed, options);
+  if (name == "city_loop") return detail::makeCityLoop(seed, options);
+  if (options.traffic) {
+    throw std::invalid_argument("traffic needs streets: only the city_* scenes have it, not '" +
+                                name + "'");
   }
   if (name == "courtyard_loop") return detail::makeCourtyardLoop(seed);
   if (name == "office_orbit") return detail::makeOfficeOrbit(seed);
@@ -24,8 +31,6 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed, int laps) {
   if (name == "sphere_flyover") return detail::makeSphereFlyover(seed);
   if (name == "desk") return detail::makeDesk(seed);
   if (name == "office_pan") return detail::makeOfficePan(seed);
-  if (name == "city_block") return detail::makeCityBlock(seed);
-  if (name == "city_loop") return detail::makeCityLoop(seed, laps);
   if (name == "facade_grid") return detail::makeFacadeGrid(seed);
   std::string known;
   for (const std::string& n : scenarioNames())

@@ -16,8 +16,8 @@ Scenario makeSphereFlyover(std::uint32_t seed);
 Scenario makeDesk(std::uint32_t seed);
 Scenario makeFacadeGrid(std::uint32_t seed);
 Scenario makeOfficePan(std::uint32_t seed);
-Scenario makeCityBlock(std::uint32_t seed);
-Scenario makeCityLoop(std::uint32_t seed, int laps = 1);
+Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options);
+Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options);
 
 /// The furnished 6 m x 5 m x 2.7 m room of office_orbit (walls, floor, ceiling, desk with a
 /// monitor, cabinets, shelves, boxes); returns the desk's base centre.

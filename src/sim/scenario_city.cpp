@@ -13,6 +13,7 @@
 #include <cmath>
 
 #include "city_route.h"
+#include "city_traffic.h"
 #include "city_world.h"
 #include "scenario_builders.h"
 
@@ -54,7 +55,7 @@ void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, s
 
 }  // namespace
 
-Scenario makeCityBlock(std::uint32_t seed) {
+Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options) {
   Scenario scenario;
   scenario.name = "city_block";
   scenario.description = "forward-looking car camera, one loop round a 110 m x 75 m city block";
@@ -68,11 +69,12 @@ Scenario makeCityBlock(std::uint32_t seed) {
                                                 grid.node(1, 1),   grid.node(1, 0),
                                                 grid.node(0, 0),   grid.node(0, 1.0)};
   buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
   return scenario;
 }
 
-Scenario makeCityLoop(std::uint32_t seed, int laps) {
+Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options) {
   Scenario scenario;
   scenario.name = "city_loop";
   scenario.description =
@@ -90,12 +92,15 @@ Scenario makeCityLoop(std::uint32_t seed, int laps) {
                                             grid.node(0, 0), grid.node(0, 1), grid.node(2, 1),
                                             grid.node(2, 0), grid.node(0, 0)};
   std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5)};
-  for (int i = 0; i < laps; ++i)
+  for (int i = 0; i < options.laps; ++i)
     streets.insert(streets.end(), lap.begin(), lap.end());
   streets.push_back(grid.node(0, 0.9));
-  if (laps > 1) scenario.description += ", driven " + std::to_string(laps) + " times";
+  if (options.laps > 1) {
+    scenario.description += ", driven " + std::to_string(options.laps) + " times";
+  }
   buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
   return scenario;
 }
 

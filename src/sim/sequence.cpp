@@ -96,16 +96,31 @@ geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
 
 SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(params) {
   params_.validate();
-  scenario_ = makeScenario(params_.scene, params_.scene_seed.value_or(params_.seed), params_.laps);
+  ScenarioOptions options;
+  options.traffic = params_.traffic;
+  options.traffic_seed = params_.seed;
+  options.motion_seed = params_.seed;
+  options.laps = params_.laps;
+  scenario_ = makeScenario(params_.scene, params_.scene_seed.value_or(params_.seed), options);
   if (params_.scene_seed && *params_.scene_seed != params_.seed) {
     // The same place, walked with another wobble: the motion of the scenario of `seed`.
-    scenario_.T_world_cam = makeScenario(params_.scene, params_.seed, params_.laps).T_world_cam;
+    ScenarioOptions drive;
+    drive.laps = params_.laps;
+    scenario_.T_world_cam = makeScenario(params_.scene, params_.seed, drive).T_world_cam;
   }
   if (params_.start_fraction > 0.0) {
     const double offset = params_.start_fraction * scenario_.duration;
     scenario_.T_world_cam = [motion = scenario_.T_world_cam, offset](double t) {
       return motion(t + offset);
     };
+    if (scenario_.animate) {
+      scenario_.animate = [animate = scenario_.animate, offset](double t, Scene& scene) {
+        animate(t + offset, scene);
+      };
+      scenario_.moving_objects = [objects = scenario_.moving_objects, offset](double t) {
+        return objects(t + offset);
+      };
+    }
     scenario_.duration -= offset;
   }
   if (params_.distortion.empty()) params_.distortion = scenario_.distortion;
@@ -147,6 +162,7 @@ cv::Mat SequenceRenderer::renderAt(double t) {
     const cv::Range rows(b * height / bands, (b + 1) * height / bands);
     const double t_rows = t + readout * ((rows.start + rows.end) / (2.0 * height) - 0.5);
     const geometry::SE3 T_world_cam = scenario_.T_world_cam(std::max(0.0, t_rows));
+    if (scenario_.animate) scenario_.animate(std::max(0.0, t_rows), scenario_.scene);
     const geometry::SE3 T_cam_world = T_world_cam.inverse();
     if (params_.color) {
       renderer_->renderColor(scenario_.scene, T_cam_world, image, rows.start, rows.end);

@@ -45,6 +45,8 @@ const char* kUsage =
     "  --optics-blur SIGMA      lens softness, Gaussian sigma in pixels (default 0.5)\n"
     "  --blackout START:LENGTH  black frames from START for LENGTH seconds\n"
     "  --start-time S           stamp of the first frame (default 1000 s)\n"
+    "  --traffic                city_* scenes: moving cars in the streets (oncoming, crossing,\n"
+    "                           turning in ahead), from --seed; the tracker must reject them\n"
     "  --quiet                  no progress output\n"
     "Camera effects (doc/sequences.md):\n"
     "  --rolling-shutter S      readout time top to bottom row (default 0: global shutter);\n"
@@ -87,6 +89,7 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   if (cl.has("fov") && p.horizontal_fov_deg == 0) throw std::invalid_argument("--fov must be > 0");
   p.distortion = cl.text("distortion", "");
   p.color = cl.has("color");
+  p.traffic = cl.has("traffic");
   p.start_time = cl.number("start-time", 1000.0);
   p.realism.noise_sigma = cl.number("noise", 0.0);
   p.realism.exposure_amplitude = cl.number("exposure", 0.0);
@@ -142,6 +145,7 @@ int run(const sds::io::CommandLine& cl) {
                          "blackout",
                          "start-time",
                          "quiet",
+                         "traffic",
                          "rolling-shutter",
                          "rolling-shutter-bands",
                          "vignetting",
@@ -188,5 +192,5 @@ int run(const sds::io::CommandLine& cl) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return sds::io::runTool(argc, argv, kUsage, {"color", "quiet", "auto-exposure"}, run);
+  return sds::io::runTool(argc, argv, kUsage, {"color", "quiet", "auto-exposure", "traffic"}, run);
 }

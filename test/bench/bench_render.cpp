@@ -50,6 +50,32 @@ int main(int argc, char** argv) {
                  "one thread; on a shared machine wall-clock fps is lower");
     }
   }
+  // Traffic (render_sequence --traffic): the moving cars' surfaces are moved before each frame.
+  for (const std::string name : {"city_block", "city_loop"}) {
+    std::unique_ptr<sds::sim::Scenario> scenario;
+    sds::sim::ScenarioOptions options;
+    options.traffic = true;
+    report.timeMs(name + " --traffic: build scene (textures, traffic)", 1, [&] {
+      scenario = std::make_unique<sds::sim::Scenario>(sds::sim::makeScenario(name, 1, options));
+    });
+    sds::sim::SequenceParams params;
+    params.width = 1241;
+    params.height = 376;
+    const auto camera = sds::geometry::makeCameraModel(
+        sds::sim::sequenceCalibration(params, scenario->horizontal_fov_deg));
+    sds::sim::Renderer renderer(*camera);
+    cv::Mat image;
+    const int frames = 200;
+    const std::clock_t cpu_start = std::clock();
+    for (int i = 0; i < frames; ++i) {
+      const double t = scenario->duration * i / frames;
+      scenario->animate(t, scenario->scene);
+      renderer.render(scenario->scene, scenario->T_world_cam(t).inverse(), image);
+    }
+    const double cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    report.add(name + " --traffic 1241x376 none: renderer, CPU time", frames / cpu_seconds, "fps",
+               "one thread, moving cars placed per frame");
+  }
   const std::string out = std::filesystem::temp_directory_path() / "sds_bench_render";
   std::filesystem::remove_all(out);
   report.timeMs(

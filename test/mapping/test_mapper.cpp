@@ -62,5 +62,42 @@ TEST(Mapper, WindowBaCorrectsPerturbedKeyframes) {
   }
 }
 
+// A point with (almost) no parallax, as on a car driving with the camera, sits anywhere along
+// its ray; one far beyond the scene (over 50 times the keyframe's median depth) is removed from
+// the map and listed in the update, a far but plausible one (17 times) is kept.
+TEST(Mapper, RunawayPointsAreRemoved) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> xy(-2.0, 2.0), z(4.0, 8.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 150; ++i)
+    points.emplace_back(xy(rng), xy(rng), z(rng));
+  points.emplace_back(0.5, 0.0, 100.0);  // 150: far, kept
+  points.emplace_back(-0.5, 0.0, 1e4);   // 151: run away
+  auto truth = [](int k) {
+    return geometry::SE3(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.2 * k, 0, 0));
+  };
+  Mapper mapper(MapperParams{}, 500.0);
+  std::vector<map::PointId> removed;
+  for (int k = 0; k < 5; ++k) {
+    map::KeyframeMessage message;
+    message.keyframe.id = k;
+    message.keyframe.timestamp = k;
+    message.keyframe.T_kf_world = truth(k);
+    for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+      if (k == 0) message.new_points.push_back({static_cast<map::PointId>(i), points[i], 0});
+      message.keyframe.observations.push_back(
+          {static_cast<map::PointId>(i), (truth(k) * points[i]).hnormalized()});
+    }
+    const map::MapUpdate update = mapper.addKeyframe(message);
+    removed.insert(removed.end(), update.removed_points.begin(), update.removed_points.end());
+    for (const auto& [id, p] : update.point_positions)
+      EXPECT_NE(id, 151u);
+  }
+  EXPECT_EQ(removed, std::vector<map::PointId>{151});
+  EXPECT_FALSE(mapper.map().hasPoint(151));
+  EXPECT_TRUE(mapper.map().hasPoint(150));
+  EXPECT_EQ(mapper.map().numPoints(), 151u);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::mapping

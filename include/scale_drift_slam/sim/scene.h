@@ -29,6 +29,8 @@ struct Surface {
   /// False: visible only from the front, where the texture is not mirrored (edge1 to the right,
   /// edge2 downwards), i.e. invisible from the side that edge1 x edge2 points to.
   bool double_sided = true;
+  /// Not drawn (a moving object out of the world at the time rendered).
+  bool hidden = false;
 };
 
 /// Grey level of rays that hit no surface, as a function of the ray's elevation in the world
