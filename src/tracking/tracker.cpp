@@ -295,21 +295,8 @@ void Tracker::restoreMap(
 }
 
 void Tracker::applyMapUpdate(const map::MapUpdate& update) {
-  // The last frames were tracked against the newest keyframe: where the window BA moves it, they
-  // move with it (their pose relative to it is kept), or the next frame's constant-velocity guess
-  // would be inconsistent with the points the BA just moved with it.
-  const map::KeyframeId newest = next_keyframe_id_ > 0 ? next_keyframe_id_ - 1 : 0;
-  const std::optional<geometry::SE3> newest_before =
-      next_keyframe_id_ > 0 && map_.hasKeyframe(newest)
-          ? std::optional<geometry::SE3>(map_.keyframe(newest).T_kf_world)
-          : std::nullopt;
   if (!map_.apply(update)) return;
   candidates_.apply(update);
-  if (!update.S_new_old && newest_before && map_.hasKeyframe(newest)) {
-    const geometry::SE3 T_new_old = map_.keyframe(newest).T_kf_world.inverse() * *newest_before;
-    T_previous_world_ = T_previous_world_ * T_new_old.inverse();
-    T_before_previous_world_ = T_before_previous_world_ * T_new_old.inverse();
-  }
   if (!update.S_new_old) return;
   // A loop correction: the camera moves with the newest keyframe.
   const geometry::Sim3& S = *update.S_new_old;
