@@ -133,6 +133,8 @@ def headless(words):
             w = 'master_uri:=' + os.environ['ROS_MASTER_URI']
         elif key == 'address':
             w = 'address:=127.0.0.1'
+        elif key == 'map_file' and value.startswith('/tmp/'):  # where save_map wrote it here
+            w = 'map_file:=' + os.path.join(out, value[len('/tmp/'):])
         elif key == 'calibration_file' and not os.path.exists(value):
             w = 'calibration_file:=' + os.path.join(root, 'config', 'euroc_cam0.yaml')
         if w != words[len(result)]:
