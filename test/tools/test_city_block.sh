@@ -7,17 +7,26 @@
 # corrected trajectory within 0.5 % of the path (ATE after Sim(3) alignment).
 # Before the flow started at the predicted positions (motion_prior.predict_flow) tracking was lost
 # in the fourth turn with seed 1 (frames 390-438, 89.5 % tracked; doc/frontend.md). ~15 s.
+# SDS_CITY_TRAFFIC=1 (test_city_block_traffic.sh): the same drive with --traffic.
 set -euo pipefail
 bin="${SDS_BIN_DIR:?}"
 checks="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/loop_checks.py"
-work="${SDS_TEST_OUTPUT_DIR:?}/city_block"
+traffic="${SDS_CITY_TRAFFIC:-0}"
+work="${SDS_TEST_OUTPUT_DIR:?}/city_block$([[ $traffic == 1 ]] && echo _traffic || true)"
 seed="${SDS_CITY_SEED:-1}"
 rm -rf "$work"
 mkdir -p "$work"
 fail() { echo "FAIL: $*" >&2; exit 1; }
 printf "system:\n  mapping_thread: false\n" > "$work/inline.yaml"
 
-"$bin/render_sequence" --scene city_block --noise 1 --seed "$seed" --out "$work/seq" --quiet
+scene=(--scene city_block)
+[[ $traffic == 1 ]] && scene+=(--traffic)
+"$bin/render_sequence" "${scene[@]}" --noise 1 --seed "$seed" --out "$work/seq" --quiet
+if [[ $traffic == 1 ]]; then
+  cars=$(sed -n 's/.*traffic: \([0-9]*\) moving cars.*/\1/p' "$work/seq/rgb.txt" | head -1)
+  echo "traffic: ${cars:-0} moving cars"
+  [[ "${cars:-0}" -ge 10 ]] || fail "expected at least 10 moving cars in the city_block traffic"
+fi
 "$bin/run_sequence" "$work/seq" --out "$work/out" --config "$work/inline.yaml" --quiet \
   > "$work/run.log" 2>&1 || { tail -20 "$work/run.log"; fail "run_sequence"; }
 grep -E "^frames|^loops" "$work/run.log"
