@@ -28,34 +28,37 @@ void serialize(Archive& ar, Eigen::Matrix<Scalar, Rows, Cols, Options, MaxRows, 
     ar(m.data()[i]);
 }
 
-template <class Archive>
-void save(Archive& ar, const sds::geometry::SE3& T) {
-  double data[7];
-  T.toData(data);
+/// SE(3) and Sim(3) as their N parameters (toData / fromData).
+template <std::size_t N, class Archive, class Group>
+void saveParameters(Archive& ar, const Group& g) {
+  double data[N];
+  g.toData(data);
   for (const double d : data)
     ar(d);
 }
-template <class Archive>
-void load(Archive& ar, sds::geometry::SE3& T) {
-  double data[7];
+template <std::size_t N, class Archive, class Group>
+void loadParameters(Archive& ar, Group& g) {
+  double data[N];
   for (double& d : data)
     ar(d);
-  T = sds::geometry::SE3::fromData(data);
+  g = Group::fromData(data);
 }
 
 template <class Archive>
+void save(Archive& ar, const sds::geometry::SE3& T) {
+  saveParameters<7>(ar, T);
+}
+template <class Archive>
+void load(Archive& ar, sds::geometry::SE3& T) {
+  loadParameters<7>(ar, T);
+}
+template <class Archive>
 void save(Archive& ar, const sds::geometry::Sim3& S) {
-  double data[8];
-  S.toData(data);
-  for (const double d : data)
-    ar(d);
+  saveParameters<8>(ar, S);
 }
 template <class Archive>
 void load(Archive& ar, sds::geometry::Sim3& S) {
-  double data[8];
-  for (double& d : data)
-    ar(d);
-  S = sds::geometry::Sim3::fromData(data);
+  loadParameters<8>(ar, S);
 }
 
 /// Grey images and descriptor tables: CV_8UC1 only (all the map holds).
