@@ -25,6 +25,7 @@
 #include "scale_drift_slam/loop/vocabulary.h"
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/node_params.h"
+#include "scale_drift_slam/ros/node_shutdown.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/system/loop_closer_endpoint.h"
 #include "scale_drift_slam/system/map_snapshot.h"
@@ -303,7 +304,8 @@ class LoopClosureNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "loop_closure_node");
+  ros::init(argc, argv, "loop_closure_node", ros::init_options::NoSigintHandler);
+  ros_conversions::catchSigint();
   ros::NodeHandle nh, pnh("~");
   ros_conversions::LoopClosureNodeConfig config;
   try {
@@ -318,7 +320,10 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);  // the worker's OpenCV calls stay on its thread
   try {
     LoopClosureNode node(nh, pnh, std::move(config));
-    ros::spin();  // the callbacks only queue (~get_map_part waits for the worker)
+    ros_conversions::spinUntilSigint();  // the callbacks only queue (~get_map_part waits for
+                                         // the worker)
+    const std::string stayed = ros_conversions::stayForMapSaveOnShutdown();
+    if (!stayed.empty()) ROS_INFO("on shutdown: %s", stayed.c_str());
   } catch (const std::exception& e) {  // an unusable ~map_file
     ROS_FATAL("loop_closure_node: %s", e.what());
     return 1;

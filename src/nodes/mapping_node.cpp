@@ -10,8 +10,6 @@
 // for through their ~get_map_part); ~map_file starts in a saved map (doc/map_file.md, "In ROS").
 // Everything runs on the main thread, one message at a time, so the map needs no lock.
 
-#include <atomic>
-#include <csignal>
 #include <filesystem>
 #include <optional>
 #include <random>
@@ -30,6 +28,7 @@
 #include "scale_drift_slam/ros/conversions.h"
 #include "scale_drift_slam/ros/frames.h"
 #include "scale_drift_slam/ros/node_params.h"
+#include "scale_drift_slam/ros/node_shutdown.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/ros/visualization.h"
 #include "scale_drift_slam/system/map_snapshot.h"
@@ -59,8 +58,9 @@ class MappingNode {
     if (endpoint_.map().numKeyframes() > 0) publishMap();
   }
 
-  /// ~save_map_on_shutdown: before ros::shutdown (the other nodes may be gone by then: the save
-  /// then fails with the reason, doc/map_file.md "In ROS").
+  /// ~save_map_on_shutdown: before ros::shutdown. The tracking and loop-closure nodes stopped at
+  /// the same time stay until this node has gone (ros/node_shutdown.h); nodes that have gone
+  /// already make the save fail with the reason (doc/map_file.md "In ROS").
   void saveOnShutdown() {
     if (params_.save_map_on_shutdown.empty()) return;
     const std::string path = params_.save_map_on_shutdown == "true" ? params_.save_map_file
@@ -335,14 +335,9 @@ class MappingNode {
 
 }  // namespace
 
-std::atomic<bool> g_shutdown_requested{false};
-void onSigint(int) {
-  g_shutdown_requested = true;
-}
-
 int main(int argc, char** argv) {
   ros::init(argc, argv, "mapping_node", ros::init_options::NoSigintHandler);
-  std::signal(SIGINT, onSigint);
+  ros_conversions::catchSigint();
   ros::NodeHandle nh, pnh("~");
   ros_conversions::MappingNodeConfig config;
   try {
@@ -357,9 +352,7 @@ int main(int argc, char** argv) {
   try {
     MappingNode node(nh, pnh, std::move(config));
     // Our own SIGINT handling, so that ~save_map_on_shutdown runs while the node is still up.
-    while (ros::ok() && !g_shutdown_requested) {
-      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.1));
-    }
+    ros_conversions::spinUntilSigint();
     node.saveOnShutdown();
   } catch (const std::exception& e) {  // an unusable ~map_file
     ROS_FATAL("mapping_node: %s", e.what());

@@ -23,6 +23,7 @@
 #include "scale_drift_slam/ros/image_conversions.h"
 #include "scale_drift_slam/ros/image_stamps.h"
 #include "scale_drift_slam/ros/node_params.h"
+#include "scale_drift_slam/ros/node_shutdown.h"
 #include "scale_drift_slam/ros/pose_publisher.h"
 #include "scale_drift_slam/ros/slam_messages.h"
 #include "scale_drift_slam/ros/visualization.h"
@@ -59,6 +60,12 @@ class TrackingNode {
     update_spinner_.start();
   }
   ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
+
+  /// Takes no more images (on shutdown, while the mapping node may still ask for the map).
+  void stopTracking() {
+    image_sub_.shutdown();
+    compressed_sub_.shutdown();
+  }
   TrackingNode(const TrackingNode&) = delete;
   TrackingNode& operator=(const TrackingNode&) = delete;
 
@@ -352,7 +359,8 @@ class TrackingNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "tracking_node");
+  ros::init(argc, argv, "tracking_node", ros::init_options::NoSigintHandler);
+  ros_conversions::catchSigint();
   ros::NodeHandle nh, pnh("~");
   ros_conversions::TrackingNodeConfig config;
   try {
@@ -367,7 +375,10 @@ int main(int argc, char** argv) {
   cv::setNumThreads(1);  // one core for tracking; the mapping node has the other
   try {
     TrackingNode node(nh, pnh, std::move(config));
-    ros::spin();
+    ros_conversions::spinUntilSigint();
+    node.stopTracking();  // the map stays as the mapping node may save it
+    const std::string stayed = ros_conversions::stayForMapSaveOnShutdown();
+    if (!stayed.empty()) ROS_INFO("on shutdown: %s", stayed.c_str());
   } catch (const std::exception& e) {  // e.g. an image_transport plugin that is not installed
     ROS_FATAL("tracking_node: %s", e.what());
     return 1;

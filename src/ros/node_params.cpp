@@ -82,14 +82,10 @@ class Reader {
   void readPathOrBool(const std::string& key, std::string* value) {
     known_.insert(key);
     if (!params_.hasMember(key)) return;
-    XmlRpcValue& v = params_[key];
-    if (v.getType() == XmlRpcValue::TypeBoolean) {
-      *value = static_cast<bool>(v) ? "true" : "";
-    } else if (v.getType() == XmlRpcValue::TypeString) {
-      *value = static_cast<std::string>(v);
-      if (*value == "false") value->clear();
-    } else {
-      fail(key, "must be a path or a bool, got " + kindName(v.getType()));
+    try {
+      *value = pathOrBool(params_[key]);
+    } catch (const std::runtime_error&) {
+      fail(key, "must be a path or a bool, got " + kindName(params_[key].getType()));
     }
   }
   void read(const std::string& key, double* value) {
@@ -352,6 +348,14 @@ LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_p
   config.slam = slamParams(private_params);
   config.unknown = reader.unknown(slamSections());
   return config;
+}
+
+std::string pathOrBool(const XmlRpc::XmlRpcValue& value) {
+  XmlRpcValue v = value;  // XmlRpcValue's conversions are not const
+  if (v.getType() == XmlRpcValue::TypeBoolean) return static_cast<bool>(v) ? "true" : "";
+  if (v.getType() != XmlRpcValue::TypeString) throw std::runtime_error("not a path or a bool");
+  const std::string text = static_cast<std::string>(v);
+  return text == "false" ? "" : text;
 }
 
 XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh) {

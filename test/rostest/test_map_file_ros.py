@@ -82,6 +82,28 @@ def bad_node_run(node, *params):
     return run.returncode, run.stdout.decode(errors='replace')
 
 
+def check_offline(test, map_file, folder, keyframes):
+    """The file a node wrote is run_sequence's format: it loads `keyframes` and localises in it
+    within 10 frames."""
+    name = os.path.splitext(os.path.basename(map_file))[0]
+    out = os.path.join(sds.work_dir(), name + '_offline')
+    inline = os.path.join(sds.work_dir(), name + '_inline.yaml')
+    with open(inline, 'w') as config:  # the loop closer inline: the answer at the next frame
+        config.write('system:\n  mapping_thread: false\n')
+    log = subprocess.check_output(
+        [sds.tool('run_sequence'), folder, '--out', out, '--load-map', map_file,
+         '--localization', '--max-frames', '30', '--config', inline, '--quiet'],
+        stderr=subprocess.STDOUT).decode(errors='replace')
+    summary = json.load(open(os.path.join(out, 'summary.json')))
+    test.assertEqual(summary['loaded_map_keyframes'], keyframes, log)
+    test.assertEqual(summary['keyframes_added'], 0, log)
+    frames = list(csv.DictReader(open(os.path.join(out, 'frames.csv'))))
+    relocalised = [int(f['frame']) for f in frames if f['relocalised'] == '1']
+    print('run_sequence on the map saved on shutdown (%s): %d keyframes, relocalised at frame %s'
+          % (os.path.basename(map_file), keyframes, relocalised[:1]))
+    test.assertTrue(relocalised and relocalised[0] < 10, log)
+
+
 class MapFileRos(unittest.TestCase):
 
     def test_save_restart_localise(self):
@@ -142,27 +164,8 @@ class MapFileRos(unittest.TestCase):
             stop(slam)
             recorder.close()
         self.assertTrue(os.path.exists(map_file + '.shutdown'), 'no map saved on shutdown')
-        self.check_offline(map_file + '.shutdown', second, saved.keyframes)
+        check_offline(self, map_file + '.shutdown', second, saved.keyframes)
         self.check_bad_files(map_file)
-
-    def check_offline(self, map_file, folder, keyframes):
-        """The file the node wrote is run_sequence's format: it loads and localises in it."""
-        out = os.path.join(sds.work_dir(), 'courtyard_ros_offline')
-        inline = os.path.join(sds.work_dir(), 'courtyard_ros_inline.yaml')
-        with open(inline, 'w') as config:  # the loop closer inline: the answer at the next frame
-            config.write('system:\n  mapping_thread: false\n')
-        log = subprocess.check_output(
-            [sds.tool('run_sequence'), folder, '--out', out, '--load-map', map_file,
-             '--localization', '--max-frames', '30', '--config', inline, '--quiet'],
-            stderr=subprocess.STDOUT).decode(errors='replace')
-        summary = json.load(open(os.path.join(out, 'summary.json')))
-        self.assertEqual(summary['loaded_map_keyframes'], keyframes, log)
-        self.assertEqual(summary['keyframes_added'], 0, log)
-        frames = list(csv.DictReader(open(os.path.join(out, 'frames.csv'))))
-        relocalised = [int(f['frame']) for f in frames if f['relocalised'] == '1']
-        print('run_sequence on the map the mapping node saved on shutdown: %d keyframes, '
-              'relocalised at frame %s' % (keyframes, relocalised[:1]))
-        self.assertTrue(relocalised and relocalised[0] < 10, log)
 
     def check_localisation(self, recorder, folder, first_evaluation, map_keyframes):
         statuses = recorder.statuses

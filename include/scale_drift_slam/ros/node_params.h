@@ -120,6 +120,10 @@ LoopClosureNodeConfig loopClosureNodeConfig(const XmlRpc::XmlRpcValue& private_p
 /// ~place_recognition/appearance/max_features).
 system::SlamParams slamParams(const XmlRpc::XmlRpcValue& private_params);
 
+/// A parameter that is a path or a bool (~save_map_on_shutdown): true gives "true", false and
+/// "false" give "". Throws for another kind of value.
+std::string pathOrBool(const XmlRpc::XmlRpcValue& value);
+
 /// All parameters of the node's private namespace (an empty struct when there are none).
 XmlRpc::XmlRpcValue privateParams(const ros::NodeHandle& private_nh);
 
