@@ -93,7 +93,7 @@ std::vector<PromotedFeature> FeatureCandidates::promote(map::KeyframeId keyframe
         promoted.push_back({result.p_world, c.filter.originId(), c.views, c.appearance});
         continue;
       }
-      if (++c.rejections >= params_.max_rejections) continue;
+      if (result.inconsistent || ++c.rejections >= params_.max_rejections) continue;
     }
     if (kept != i) candidates_[kept] = std::move(c);
     ++kept;

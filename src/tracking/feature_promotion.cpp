@@ -12,6 +12,15 @@
 namespace scale_drift_slam::tracking {
 namespace {
 
+/// The adjusted point's depth in the filter's origin may differ from the filter's by at most this
+/// factor. With little parallax between the views the reprojection errors stay small all along
+/// the ray, and the adjustment can run far out along it: on a feature of a moving car, whose
+/// views do not meet at one point, to 1e7-1e8 map units (a two-hosts run promoted a point 2e7
+/// away, which every receiver then refused with its keyframe). Such a feature is dropped, not
+/// tried again (PromotionResult::inconsistent): it occupied a candidate's place where new ones
+/// should spawn. The certain filter (sigma below 10 %) is rarely wrong by a factor of 10.
+constexpr double kMaxDepthRatio = 10.0;
+
 /// sum |f (z_k - proj(T_k x))|^2 and its Gauss-Newton system in the point x; infinity when x is
 /// behind one of the cameras.
 double pointCost(const std::vector<PromotionView>& views, const Eigen::Vector3d& x, double focal,
@@ -60,6 +69,14 @@ PromotionResult promoteFeature(const InverseDepthFilter& filter,
       });
   if (!std::isfinite(cost)) {
     result.reason = "the feature is behind a keyframe";
+    return result;
+  }
+  const double q = 1.0 / (filter.originPose() * x).z();
+  const double q_filter = filter.state().z();
+  if (!(q > 0.0) || std::abs(std::log(q / q_filter)) > std::log(kMaxDepthRatio)) {
+    result.reason = "the adjusted depth " + std::to_string(1.0 / q) + " is far from the filter's " +
+                    std::to_string(1.0 / q_filter);
+    result.inconsistent = true;
     return result;
   }
   pointCost(views, x, focal_length_px, nullptr, nullptr, &result.errors_px);

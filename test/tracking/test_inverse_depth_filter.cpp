@@ -141,6 +141,25 @@ TEST(FeaturePromotion, AcceptsAConsistentPointAndRejectsALargeError) {
   EXPECT_FALSE(promoteFeature(filter, {views[0]}, kFocal).accepted);
 }
 
+TEST(FeaturePromotion, RejectsAPointThatRunsFarFromTheFiltersDepth) {
+  // The filter is certain of a depth of 6; the keyframes' views agree with a point 1000 times as
+  // far on the same ray (so far that their baselines give it no parallax): the adjustment runs
+  // out along the ray with small reprojection errors, and the promotion must refuse it.
+  const InverseDepthFilter filter = runFilter(6.0, 1.5, 9);
+  ASSERT_TRUE(filter.isCertain());
+  const geometry::SE3 T0 = cameraAt(0.0);
+  const Eigen::Vector3d far = T0.inverse() * (Eigen::Vector3d(1.8, -0.6, 6.0) * 1000.0);
+  std::vector<PromotionView> views;
+  for (int k = 0; k < 3; ++k) {
+    const geometry::SE3 T = cameraAt(0.6 * k);
+    const Eigen::Vector3d y = T * far;
+    views.push_back({static_cast<map::KeyframeId>(k), T, y.head<2>() / y.z()});
+  }
+  const PromotionResult result = promoteFeature(filter, views, kFocal);
+  EXPECT_FALSE(result.accepted) << "promoted at " << result.p_world.transpose();
+  EXPECT_NE(result.reason.find("far from the filter"), std::string::npos) << result.reason;
+}
+
 TEST(InverseDepthFilter, RejectsBadInput) {
   InverseDepthFilterParams params;
   params.pixel_sigma_px = 0.0;

@@ -105,12 +105,16 @@ struct PromotionResult {
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   std::vector<double> errors_px;  ///< Final reprojection error per view.
   std::string reason;             ///< Why it was rejected (empty when accepted).
+  /// The views disagree with the filter's depth (a moving object, a mistracked feature): the
+  /// feature will not become consistent by waiting.
+  bool inconsistent = false;
 };
 
 /// The promotion rule (doc/algorithm.md, "Front-end: keyframe dropping"): a certain filter's
 /// point is bundle adjusted (point only, LM from the filter's estimate) against a few (about
 /// three) surrounding keyframes and rejected if it reprojects with more than
-/// max_promotion_error_px in any of them, or lands behind one. Needs >= 2 views.
+/// max_promotion_error_px in any of them, or lands behind one, or at a depth (in the filter's
+/// origin) more than 10 times or less than a tenth of the filter's. Needs >= 2 views.
 PromotionResult promoteFeature(const InverseDepthFilter& filter,
                                const std::vector<PromotionView>& views, double focal_length_px);
 
