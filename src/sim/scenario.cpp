@@ -9,7 +9,7 @@ namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
   return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover", "desk",
-          "office_pan",     "city_block",   "city_loop",         "facade_grid"};
+          "office_pan",     "city_block",   "city_loop",         "city_tour",      "facade_grid"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed, const ScenarioOptions& options) {
@@ -21,6 +21,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed, const Scenari
   }
   if (name == "city_block") return detail::makeCityBlock(seed, options);
   if (name == "city_loop") return detail::makeCityLoop(seed, options);
+  if (name == "city_tour") return detail::makeCityTour(seed, options);
   if (options.traffic) {
     throw std::invalid_argument("traffic needs streets: only the city_* scenes have it, not '" +
                                 name + "'");

@@ -18,6 +18,7 @@ Scenario makeFacadeGrid(std::uint32_t seed);
 Scenario makeOfficePan(std::uint32_t seed);
 Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options);
 Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options);
+Scenario makeCityTour(std::uint32_t seed, const ScenarioOptions& options);
 
 /// The furnished 6 m x 5 m x 2.7 m room of office_orbit (walls, floor, ceiling, desk with a
 /// monitor, cabinets, shelves, boxes); returns the desk's base centre.

@@ -9,6 +9,10 @@
 // city_loop: a 330 m x 160 m loop round six blocks, then a second, smaller loop that re-drives
 // the first loop's west and south streets in the same direction (~1.6 km in all); with laps > 1
 // the whole route again from its south-west corner, as often (scripts/bench city).
+// city_tour: ~5.6 km through 40 blocks (8 x 5) that it mostly sees once: north up the west edge,
+// then east and west along five streets in turn (a serpentine, left and right turns), back west
+// along the south edge and north again through the start (one large loop), for the city-scale
+// benchmark (1000+ keyframes of new streets).
 
 #include <cmath>
 
@@ -98,6 +102,32 @@ Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options) {
   if (options.laps > 1) {
     scenario.description += ", driven " + std::to_string(options.laps) + " times";
   }
+  buildCity(scenario.scene, grid, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
+  return scenario;
+}
+
+Scenario makeCityTour(std::uint32_t seed, const ScenarioOptions& options) {
+  Scenario scenario;
+  scenario.name = "city_tour";
+  scenario.description =
+      "forward-looking car camera, a tour of 8 x 5 city blocks (a serpentine) back to its start";
+  CityGrid grid;
+  grid.pitch_y = 80.0;
+  grid.block_i0 = -1;
+  grid.block_i1 = 9;
+  grid.block_j0 = -1;
+  grid.block_j1 = 6;
+  std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5), grid.node(0, 5), grid.node(8, 5)};
+  for (int j = 4; j >= 1; --j) {  // down the serpentine: west on j = 4 and 2, east on 3 and 1
+    const bool west = j % 2 == 0;
+    streets.push_back(grid.node(west ? 8 : 1, j));
+    streets.push_back(grid.node(west ? 1 : 8, j));
+  }
+  streets.push_back(grid.node(8, 0));
+  streets.push_back(grid.node(0, 0));
+  streets.push_back(grid.node(0, 1.2));  // through the start again: the loop
   buildCity(scenario.scene, grid, streets, seed);
   addDrive(scenario, streets, options.motion_seed.value_or(seed));
   if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
