@@ -57,6 +57,15 @@ void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, s
                           std::to_string(static_cast<int>(route->duration())) + " s)";
 }
 
+/// The city seen from `streets`, the drive along them and, when asked, the traffic.
+void buildCityAndDrive(Scenario& scenario, const CityGrid& grid,
+                       const std::vector<Eigen::Vector2d>& streets, std::uint32_t seed,
+                       const ScenarioOptions& options) {
+  buildCity(scenario.scene, grid, streets, seed);
+  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
+}
+
 }  // namespace
 
 Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options) {
@@ -72,9 +81,7 @@ Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options) {
   const std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5), grid.node(0, 1),
                                                 grid.node(1, 1),   grid.node(1, 0),
                                                 grid.node(0, 0),   grid.node(0, 1.0)};
-  buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, options.motion_seed.value_or(seed));
-  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
+  buildCityAndDrive(scenario, grid, streets, seed, options);
   return scenario;
 }
 
@@ -102,9 +109,7 @@ Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options) {
   if (options.laps > 1) {
     scenario.description += ", driven " + std::to_string(options.laps) + " times";
   }
-  buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, options.motion_seed.value_or(seed));
-  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
+  buildCityAndDrive(scenario, grid, streets, seed, options);
   return scenario;
 }
 
@@ -128,9 +133,7 @@ Scenario makeCityTour(std::uint32_t seed, const ScenarioOptions& options) {
   streets.push_back(grid.node(8, 0));
   streets.push_back(grid.node(0, 0));
   streets.push_back(grid.node(0, 1.2));  // through the start again: the loop
-  buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, options.motion_seed.value_or(seed));
-  if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
+  buildCityAndDrive(scenario, grid, streets, seed, options);
   return scenario;
 }
 

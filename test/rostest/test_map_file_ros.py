@@ -82,6 +82,48 @@ def bad_node_run(node, *params):
     return run.returncode, run.stdout.decode(errors='replace')
 
 
+def map_and_save(test, bag, folder, map_file):
+    """slam.launch maps `bag` (played at half speed), /mapping_node/save_map writes `map_file`,
+    the keyframes (~save_trajectory) are scored against `folder`'s truth: that evaluation (a
+    json file beside the map) defines "the first run's frame". Returns (the SaveMap answer, the
+    ids of the keyframes published, the evaluation's path)."""
+    stem = os.path.splitext(map_file)[0]
+    keyframe_file = stem + '_keyframes.txt'
+    recorder = Recorder()
+    slam = launch()
+    try:
+        wait_for_nodes()
+        time.sleep(1.0)
+        sds.play_bag(bag, rate=0.5)
+        test.assertTrue(sds.wait_for_last_frame(recorder.statuses, folder))
+        time.sleep(5.0)  # the last keyframes through BA and the loop closer
+        saved = rospy.ServiceProxy('/mapping_node/save_map', SaveMap)(map_file)
+        print('save_map: %s' % saved.message)
+        test.assertTrue(saved.success, saved.message)
+        answer = rospy.ServiceProxy('/mapping_node/save_trajectory', SaveTrajectory)(keyframe_file)
+        test.assertTrue(answer.success, answer.message)
+        test.assertEqual(answer.keyframes, saved.keyframes)
+    finally:
+        stop(slam)
+        recorder.close()
+    evaluation = stem + '.evaluation.json'
+    with open(evaluation, 'w') as out:
+        out.write(subprocess.check_output(
+            [sds.tool('evaluate_trajectory'), os.path.join(folder, 'groundtruth.txt'),
+             keyframe_file, '--json']).decode())
+    report = json.load(open(evaluation))
+    print('first run: %d keyframes saved, keyframe ATE %.4f m = %.3f%% of the path' % (
+        saved.keyframes, report['ate']['rmse'],
+        100 * report['ate']['rmse'] / report['ground_truth_path_length']))
+    return saved, recorder.keyframes, evaluation
+
+
+def remove_files(*paths):
+    for path in paths:
+        if os.path.exists(path):
+            os.remove(path)
+
+
 def check_offline(test, map_file, folder, keyframes):
     """The file a node wrote is run_sequence's format: it loads `keyframes` and localises in it
     within 10 frames."""
@@ -111,40 +153,11 @@ class MapFileRos(unittest.TestCase):
         first_bag, first = sds.render_bag('courtyard_loop', FIRST_FRAMES)
         second_bag, second = sds.render_bag('courtyard_loop', SECOND_FRAMES, SECOND)
         map_file = os.path.join(work, 'courtyard_ros.map')
-        for path in (map_file, map_file + '.shutdown'):
-            if os.path.exists(path):
-                os.remove(path)
+        remove_files(map_file, map_file + '.shutdown')
 
         # 1. Map and save through the service.
-        recorder = Recorder()
-        slam = launch()
-        try:
-            wait_for_nodes()
-            time.sleep(1.0)
-            sds.play_bag(first_bag, rate=0.5)
-            self.assertTrue(sds.wait_for_last_frame(recorder.statuses, first))
-            time.sleep(5.0)  # the last keyframes through BA and the loop closer
-            saved = rospy.ServiceProxy('/mapping_node/save_map', SaveMap)(map_file)
-            print('save_map: %s' % saved.message)
-            self.assertTrue(saved.success, saved.message)
-            self.assertGreater(saved.keyframes, 30)
-            keyframe_file = os.path.join(work, 'courtyard_ros_keyframes.txt')
-            answer = rospy.ServiceProxy('/mapping_node/save_trajectory',
-                                        SaveTrajectory)(keyframe_file)
-            self.assertTrue(answer.success, answer.message)
-            self.assertEqual(answer.keyframes, saved.keyframes)
-        finally:
-            stop(slam)
-            recorder.close()
-        first_evaluation = os.path.join(work, 'courtyard_ros_first.evaluation.json')
-        with open(first_evaluation, 'w') as out:
-            out.write(subprocess.check_output(
-                [sds.tool('evaluate_trajectory'), os.path.join(first, 'groundtruth.txt'),
-                 keyframe_file, '--json']).decode())
-        report = json.load(open(first_evaluation))
-        print('first run: %d keyframes saved, keyframe ATE %.4f m = %.3f%% of the path' % (
-            saved.keyframes, report['ate']['rmse'],
-            100 * report['ate']['rmse'] / report['ground_truth_path_length']))
+        saved, _, first_evaluation = map_and_save(self, first_bag, first, map_file)
+        self.assertGreater(saved.keyframes, 30)
 
         # 2. Restart with the file, localisation only.
         recorder = Recorder()

@@ -27,12 +27,12 @@ import unittest
 import rospy
 import rostest
 from scale_drift_slam.msg import Sim3Constraint
-from scale_drift_slam.srv import SaveMap, SaveTrajectory
+from scale_drift_slam.srv import SaveTrajectory
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sds_rostest as sds  # noqa: E402
-from test_map_file_ros import (SECOND, Recorder, check_offline, launch, stop,  # noqa: E402
-                               wait_for_nodes)
+from test_map_file_ros import (SECOND, Recorder, check_offline, launch,  # noqa: E402
+                               map_and_save, remove_files, stop, wait_for_nodes)
 
 FIRST_FRAMES = 600  # 0 -> 67 % of the loop
 SECOND_FRAMES = 495  # 45 % -> 100 %: new ground from 67 %, then the first run's start again
@@ -53,34 +53,12 @@ class MapMultisessionRos(unittest.TestCase):
         second_bag, second = sds.render_bag('courtyard_loop', SECOND_FRAMES, SECOND)
         part_map = os.path.join(work, 'courtyard_part_ros.map')
         grown_map = os.path.join(work, 'courtyard_grown_ros.map')
-        for path in (part_map, grown_map):
-            if os.path.exists(path):
-                os.remove(path)
+        remove_files(part_map, grown_map)
 
         # 1. The first session: two thirds of the loop, saved.
-        recorder = Recorder()
-        slam = launch()
-        try:
-            wait_for_nodes()
-            time.sleep(1.0)
-            sds.play_bag(first_bag, rate=0.5)
-            self.assertTrue(sds.wait_for_last_frame(recorder.statuses, first))
-            time.sleep(5.0)  # the last keyframes through BA and the loop closer
-            saved = rospy.ServiceProxy('/mapping_node/save_map', SaveMap)(part_map)
-            print('save_map: %s' % saved.message)
-            self.assertTrue(saved.success, saved.message)
-            first_keyframes = os.path.join(work, 'courtyard_part_ros_keyframes.txt')
-            self.assertEqual(save_keyframes(first_keyframes), saved.keyframes)
-        finally:
-            stop(slam)
-            recorder.close()
-        old_ids = set(recorder.keyframes)
+        saved, published, first_evaluation = map_and_save(self, first_bag, first, part_map)
+        old_ids = set(published)
         self.assertEqual(len(old_ids), saved.keyframes)
-        first_evaluation = os.path.join(work, 'courtyard_part_ros.evaluation.json')
-        with open(first_evaluation, 'w') as out:
-            out.write(subprocess.check_output(
-                [sds.tool('evaluate_trajectory'), os.path.join(first, 'groundtruth.txt'),
-                 first_keyframes, '--json']).decode())
 
         # 2. The second session in mapping mode on the loaded map.
         recorder = Recorder()
