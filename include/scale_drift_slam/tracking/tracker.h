@@ -22,6 +22,7 @@
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/tracking/feature_candidates.h"
 #include "scale_drift_slam/tracking/keyframe_rule.h"
+#include "scale_drift_slam/tracking/keyframe_triangulation.h"
 #include "scale_drift_slam/tracking/map_initializer.h"
 #include "scale_drift_slam/tracking/motion_prior.h"
 #include "scale_drift_slam/tracking/tracking_map.h"
@@ -61,6 +62,7 @@ struct TrackerParams {
   features::MotionOnlyBundleAdjustmentParams motion_ba;
   FeatureCandidateParams candidates;
   KeyframeRuleParams keyframes;
+  KeyframeTriangulationParams triangulation;
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -176,6 +178,11 @@ class Tracker {
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
                            features::PointAppearance appearance, map::KeyframeMessage* message);
+  /// New points at keyframe `kf_id` matched with the previous keyframes (keyframe_triangulation.h)
+  /// away from the `occupied` pixels; their pixels are appended to `occupied`.
+  void addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& T_kf_world,
+                             const features::ImagePyramid& image,
+                             std::vector<Eigen::Vector2d>* occupied, map::KeyframeMessage* message);
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                     const features::ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
@@ -192,6 +199,7 @@ class Tracker {
   MapInitializer initializer_;
   MotionPriorEstimator motion_prior_;
   FeatureCandidates candidates_;
+  KeyframeTriangulation triangulation_;
   TrackingMap map_;
   TrackingState state_ = TrackingState::kInitializing;
 

@@ -1,0 +1,197 @@
+#include "scale_drift_slam/tracking/keyframe_triangulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <opencv2/core/hal/hal.hpp>
+
+namespace scale_drift_slam::tracking {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+/// ORB's patch: corners closer to the border than its radius get no descriptor.
+constexpr int kOrbPatchSize = 31;
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+}  // namespace
+
+void KeyframeTriangulationParams::validate() const {
+  if (max_features < 0) throw std::invalid_argument("triangulation.max_features must be >= 0");
+  if (neighbours < 1) throw std::invalid_argument("triangulation.neighbours must be >= 1");
+  if (max_descriptor_distance < 0 || max_descriptor_distance > 256) {
+    throw std::invalid_argument("triangulation.max_descriptor_distance must be in [0, 256]");
+  }
+  if (!(max_ratio > 0.0 && max_ratio <= 1.0)) {
+    throw std::invalid_argument("triangulation.max_ratio must be in (0, 1]");
+  }
+  if (!(max_epipolar_px > 0.0) || !std::isfinite(max_epipolar_px)) {
+    throw std::invalid_argument("triangulation.max_epipolar_px must be > 0");
+  }
+  if (!(min_parallax_deg >= 0.0 && min_parallax_deg < 90.0)) {
+    throw std::invalid_argument("triangulation.min_parallax_deg must be in [0, 90)");
+  }
+  if (!(max_reprojection_px > 0.0) || !std::isfinite(max_reprojection_px)) {
+    throw std::invalid_argument("triangulation.max_reprojection_px must be > 0");
+  }
+}
+
+double epipolarDistancePx(const geometry::SE3& T_b_a, const Eigen::Vector2d& xy_a,
+                          const Eigen::Vector2d& xy_b, double focal) {
+  const Eigen::Vector3d line =
+      skew(T_b_a.translation()) * (T_b_a.rotationMatrix() * xy_a.homogeneous());
+  const double norm = line.head<2>().norm();
+  if (!(norm > 0.0)) return std::numeric_limits<double>::infinity();
+  return focal * std::abs(line.dot(xy_b.homogeneous())) / norm;
+}
+
+std::optional<Eigen::Vector3d> triangulateMidpoint(const geometry::SE3& T_a_world,
+                                                   const Eigen::Vector2d& xy_a,
+                                                   const geometry::SE3& T_b_world,
+                                                   const Eigen::Vector2d& xy_b) {
+  const Eigen::Vector3d ca = T_a_world.inverseTranslation(), cb = T_b_world.inverseTranslation();
+  const Eigen::Vector3d da = T_a_world.rotation().conjugate() * xy_a.homogeneous();
+  const Eigen::Vector3d db = T_b_world.rotation().conjugate() * xy_b.homogeneous();
+  // min |ca + s da - cb - t db|^2 over s, t.
+  Eigen::Matrix2d A;
+  A << da.dot(da), -da.dot(db), da.dot(db), -db.dot(db);
+  const Eigen::Vector2d rhs((cb - ca).dot(da), (cb - ca).dot(db));
+  const double det = A.determinant();
+  if (!(std::abs(det) > 1e-12 * da.squaredNorm() * db.squaredNorm())) return std::nullopt;
+  const Eigen::Vector2d st = A.inverse() * rhs;
+  return 0.5 * (ca + st.x() * da + cb + st.y() * db);
+}
+
+KeyframeTriangulation::KeyframeTriangulation(const KeyframeTriangulationParams& params,
+                                             const features::FeatureDetectionParams& detection,
+                                             double focal_length_px)
+    : params_(params), detection_(detection), focal_(focal_length_px) {
+  params_.validate();
+  // One level, upright (the keypoints' angle is 0): the corners are FAST corners of the base
+  // image and the keyframes are a few frames apart, with little roll between them.
+  orb_ = cv::ORB::create(std::max(1, params_.max_features), 1.2f, 1, kOrbPatchSize, 0, 2,
+                         cv::ORB::FAST_SCORE, kOrbPatchSize);
+}
+
+KeyframeTriangulation::Described KeyframeTriangulation::describe(
+    map::KeyframeId id, const features::ImagePyramid& image,
+    const std::vector<Eigen::Vector2d>& occupied, const geometry::CameraModel& camera) const {
+  Described described;
+  described.id = id;
+  std::vector<cv::KeyPoint> corners =
+      features::detectSpreadCorners(image.base(), params_.max_features, detection_, occupied);
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    corners[i].angle = 0.0f;
+    corners[i].octave = 0;
+    corners[i].size = static_cast<float>(kOrbPatchSize);
+    corners[i].class_id = static_cast<int>(i);
+  }
+  cv::Mat descriptors;
+  orb_->compute(image.base(), corners, descriptors);  // drops corners near the border
+  described.descriptors = descriptors;
+  for (const cv::KeyPoint& corner : corners) {
+    const Eigen::Vector2d px(corner.pt.x, corner.pt.y);
+    described.px.push_back(px);
+    described.xy.push_back(camera.undistortToNormalized(px));
+  }
+  described.used.assign(described.px.size(), false);
+  return described;
+}
+
+std::vector<TriangulatedPoint> KeyframeTriangulation::addKeyframe(
+    map::KeyframeId id, const geometry::SE3& T_kf_world, const features::ImagePyramid& image,
+    const std::vector<Eigen::Vector2d>& occupied, const geometry::CameraModel& camera,
+    const PoseLookup& pose_of) {
+  std::vector<TriangulatedPoint> points;
+  if (params_.max_features == 0) return points;
+  Described current = describe(id, image, occupied, camera);
+  // The newest earlier keyframe first: the smallest change of view, the most matches.
+  for (auto it = recent_.rbegin(); it != recent_.rend(); ++it) {
+    const std::optional<geometry::SE3> T_other_world = pose_of(it->id);
+    if (T_other_world) match(current, T_kf_world, *it, *T_other_world, &points);
+  }
+  // Keep only the unmatched corners of the new keyframe for the next ones.
+  Described kept;
+  kept.id = id;
+  for (std::size_t i = 0; i < current.px.size(); ++i) {
+    if (current.used[i]) continue;
+    kept.px.push_back(current.px[i]);
+    kept.xy.push_back(current.xy[i]);
+    kept.descriptors.push_back(current.descriptors.row(static_cast<int>(i)));
+  }
+  kept.used.assign(kept.px.size(), false);
+  recent_.push_back(std::move(kept));
+  while (static_cast<int>(recent_.size()) > params_.neighbours)
+    recent_.pop_front();
+  return points;
+}
+
+void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur_world,
+                                  Described& other, const geometry::SE3& T_other_world,
+                                  std::vector<TriangulatedPoint>* points) const {
+  const geometry::SE3 T_other_cur = T_other_world * T_cur_world.inverse();
+  if (!(T_other_cur.translation().norm() > 0.0)) return;  // no baseline
+  const double cos_min_parallax = std::cos(params_.min_parallax_deg * kDegToRad);
+  // For each free corner of the current keyframe: the best and second-best descriptor distance
+  // among the other keyframe's free corners near its epipolar line.
+  constexpr int kNone = -1;
+  std::vector<int> best_of_other(other.px.size(), kNone);
+  std::vector<int> best_distance_of_other(other.px.size(), std::numeric_limits<int>::max());
+  std::vector<int> match_of_current(current.px.size(), kNone);
+  for (std::size_t i = 0; i < current.px.size(); ++i) {
+    if (current.used[i]) continue;
+    int best = std::numeric_limits<int>::max(), second = best, best_j = kNone;
+    const uchar* d_i = current.descriptors.ptr<uchar>(static_cast<int>(i));
+    for (std::size_t j = 0; j < other.px.size(); ++j) {
+      if (other.used[j] || epipolarDistancePx(T_other_cur, current.xy[i], other.xy[j], focal_) >
+                               params_.max_epipolar_px) {
+        continue;
+      }
+      const int d = cv::hal::normHamming(d_i, other.descriptors.ptr<uchar>(static_cast<int>(j)),
+                                         other.descriptors.cols);
+      if (d < best) {
+        second = best, best = d, best_j = static_cast<int>(j);
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j == kNone || best > params_.max_descriptor_distance ||
+        (second != std::numeric_limits<int>::max() && best > params_.max_ratio * second)) {
+      continue;
+    }
+    match_of_current[i] = best_j;
+    if (best < best_distance_of_other[best_j]) {
+      best_distance_of_other[best_j] = best;
+      best_of_other[best_j] = static_cast<int>(i);
+    }
+  }
+  const Eigen::Vector3d c_cur = T_cur_world.inverseTranslation();
+  const Eigen::Vector3d c_other = T_other_world.inverseTranslation();
+  for (std::size_t i = 0; i < current.px.size(); ++i) {
+    const int j = match_of_current[i];
+    if (j == kNone || best_of_other[j] != static_cast<int>(i)) continue;  // not mutual
+    const std::optional<Eigen::Vector3d> p =
+        triangulateMidpoint(T_cur_world, current.xy[i], T_other_world, other.xy[j]);
+    if (!p) continue;
+    const Eigen::Vector3d in_cur = T_cur_world * *p, in_other = T_other_world * *p;
+    if (!(in_cur.z() > 0.0 && in_other.z() > 0.0)) continue;
+    const double error_cur = focal_ * (in_cur.head<2>() / in_cur.z() - current.xy[i]).norm();
+    const double error_other = focal_ * (in_other.head<2>() / in_other.z() - other.xy[j]).norm();
+    if (error_cur > params_.max_reprojection_px || error_other > params_.max_reprojection_px)
+      continue;
+    const Eigen::Vector3d ray_cur = (*p - c_cur).normalized(),
+                          ray_other = (*p - c_other).normalized();
+    if (ray_cur.dot(ray_other) > cos_min_parallax) continue;
+    current.used[i] = true;
+    other.used[j] = true;
+    points->push_back({*p, current.px[i], current.xy[i], other.id, other.xy[j]});
+  }
+}
+
+}  // namespace scale_drift_slam::tracking
