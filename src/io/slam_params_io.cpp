@@ -51,6 +51,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "relocalisation_retry_frames", &t.relocalisation_retry_frames},
       {"tracker", "restart_after_lost_frames", &t.restart_after_lost_frames},
       {"tracker", "restart_below_keyframes", &t.restart_below_keyframes},
+      {"tracker", "recover_from_keyframe", &t.recover_from_keyframe},
       {"features", "fast_threshold", &t.features.fast_threshold},
       {"features", "min_fast_threshold", &t.features.min_fast_threshold},
       {"features", "border", &t.features.border},

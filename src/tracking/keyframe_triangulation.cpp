@@ -68,15 +68,55 @@ std::optional<Eigen::Vector3d> triangulateMidpoint(const geometry::SE3& T_a_worl
   return 0.5 * (ca + st.x() * da + cb + st.y() * db);
 }
 
+cv::Mat describeCorners(const cv::Mat& grey, std::vector<cv::KeyPoint>* corners) {
+  // One level, upright (angle 0): FAST corners of the base image, compared with views a few
+  // frames or keyframes away, with little roll between them.
+  static thread_local const cv::Ptr<cv::ORB> orb =
+      cv::ORB::create(500, 1.2f, 1, kOrbPatchSize, 0, 2, cv::ORB::FAST_SCORE, kOrbPatchSize);
+  for (cv::KeyPoint& corner : *corners) {
+    corner.angle = 0.0f;
+    corner.octave = 0;
+    corner.size = static_cast<float>(kOrbPatchSize);
+  }
+  cv::Mat descriptors;
+  if (corners->empty()) return descriptors;
+  orb->compute(grey, *corners, descriptors);
+  return descriptors;
+}
+
+std::vector<int> matchDescriptors(const cv::Mat& query, const cv::Mat& train, int max_distance,
+                                  double max_ratio) {
+  std::vector<int> match(query.rows, -1);
+  std::vector<int> closest_query(train.rows, -1);
+  std::vector<int> closest_distance(train.rows, std::numeric_limits<int>::max());
+  for (int i = 0; i < query.rows; ++i) {
+    int best = std::numeric_limits<int>::max(), second = best, best_j = -1;
+    for (int j = 0; j < train.rows; ++j) {
+      const int d = cv::hal::normHamming(query.ptr<uchar>(i), train.ptr<uchar>(j), query.cols);
+      if (d < best) {
+        second = best, best = d, best_j = j;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (best_j < 0 || best > max_distance || best > max_ratio * second) continue;
+    match[i] = best_j;
+    if (best < closest_distance[best_j]) {
+      closest_distance[best_j] = best;
+      closest_query[best_j] = i;
+    }
+  }
+  for (int i = 0; i < query.rows; ++i) {
+    if (match[i] >= 0 && closest_query[match[i]] != i) match[i] = -1;
+  }
+  return match;
+}
+
 KeyframeTriangulation::KeyframeTriangulation(const KeyframeTriangulationParams& params,
                                              const features::FeatureDetectionParams& detection,
                                              double focal_length_px)
     : params_(params), detection_(detection), focal_(focal_length_px) {
   params_.validate();
-  // One level, upright (the keypoints' angle is 0): the corners are FAST corners of the base
-  // image and the keyframes are a few frames apart, with little roll between them.
-  orb_ = cv::ORB::create(std::max(1, params_.max_features), 1.2f, 1, kOrbPatchSize, 0, 2,
-                         cv::ORB::FAST_SCORE, kOrbPatchSize);
 }
 
 KeyframeTriangulation::Described KeyframeTriangulation::describe(
@@ -86,15 +126,7 @@ KeyframeTriangulation::Described KeyframeTriangulation::describe(
   described.id = id;
   std::vector<cv::KeyPoint> corners =
       features::detectSpreadCorners(image.base(), params_.max_features, detection_, occupied);
-  for (std::size_t i = 0; i < corners.size(); ++i) {
-    corners[i].angle = 0.0f;
-    corners[i].octave = 0;
-    corners[i].size = static_cast<float>(kOrbPatchSize);
-    corners[i].class_id = static_cast<int>(i);
-  }
-  cv::Mat descriptors;
-  orb_->compute(image.base(), corners, descriptors);  // drops corners near the border
-  described.descriptors = descriptors;
+  described.descriptors = describeCorners(image.base(), &corners);
   for (const cv::KeyPoint& corner : corners) {
     const Eigen::Vector2d px(corner.pt.x, corner.pt.y);
     described.px.push_back(px);

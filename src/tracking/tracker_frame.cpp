@@ -33,6 +33,10 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
     researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
                    &T_cam_world, result);
   }
+  if (params_.recover_from_keyframe && result->num_inliers < params_.good_inliers) {
+    recoverFromKeyframe(image, corners, ids, search_points, &matches, &inliers, &T_cam_world,
+                        result);
+  }
   recordSearches(ids, matches, result);
   result->times.motion_ba = stage.lapMs();
 
@@ -234,6 +238,7 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
+  describeKeyframePoints(message, image);
   result->keyframes.push_back(std::move(message));
 }
 

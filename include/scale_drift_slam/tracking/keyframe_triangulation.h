@@ -58,6 +58,16 @@ std::optional<Eigen::Vector3d> triangulateMidpoint(const geometry::SE3& T_a_worl
                                                    const geometry::SE3& T_b_world,
                                                    const Eigen::Vector2d& xy_b);
 
+/// Upright ORB descriptors (one row each) of `corners` in the base image; corners too close to
+/// the border for ORB's patch are dropped from `corners`.
+cv::Mat describeCorners(const cv::Mat& grey, std::vector<cv::KeyPoint>* corners);
+
+/// For each row of `query`, the row of `train` at the smallest Hamming distance when that distance
+/// is at most `max_distance` and below `max_ratio` times the second smallest; -1 otherwise. Each
+/// train row is kept for its closest query only.
+std::vector<int> matchDescriptors(const cv::Mat& query, const cv::Mat& train, int max_distance,
+                                  double max_ratio);
+
 class KeyframeTriangulation {
  public:
   /// The current pose of a keyframe (corrected by the mapper), nullopt when it is gone.
@@ -94,7 +104,6 @@ class KeyframeTriangulation {
   KeyframeTriangulationParams params_;
   features::FeatureDetectionParams detection_;
   double focal_;
-  cv::Ptr<cv::ORB> orb_;
   std::deque<Described> recent_;  ///< The newest keyframes' free corners, oldest first.
 };
 

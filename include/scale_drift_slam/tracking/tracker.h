@@ -55,6 +55,10 @@ struct TrackerParams {
   /// the tracker initialises again (FrameResult::map_restarted). 0 keyframes: never.
   int restart_after_lost_frames = 15;
   int restart_below_keyframes = 30;
+  /// A frame tracked with fewer than good_inliers (the flow could not carry it: a wide baseline
+  /// between frames) is tracked again from the newest keyframe's map points matched by ORB
+  /// descriptor (PnP RANSAC, then active search around that pose); kept when it has more inliers.
+  bool recover_from_keyframe = true;
   features::FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -166,6 +170,20 @@ class Tracker {
                       std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                       FrameResult* result);
   /// The points' search statistics (retirement) and the visible count of `result`.
+  /// The newest keyframe's map points described (ORB) for recoverFromKeyframe.
+  void describeKeyframePoints(const map::KeyframeMessage& message,
+                              const features::ImagePyramid& image);
+  /// The pose from the newest keyframe's points matched by descriptor in this frame (PnP RANSAC,
+  /// refined by the motion-only BA); nothing when too few match.
+  std::optional<geometry::SE3> poseFromKeyframePoints(const features::ImagePyramid& image,
+                                                      const features::CornerGrid& corners) const;
+  /// Active search around that pose; keeps the new matches and pose when they give more inliers.
+  void recoverFromKeyframe(const features::ImagePyramid& image, const features::CornerGrid& corners,
+                           const std::vector<map::PointId>& ids,
+                           const std::vector<features::SearchPoint>& search_points,
+                           std::vector<features::SearchMatch>* matches,
+                           std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                           FrameResult* result);
   void recordSearches(const std::vector<map::PointId>& ids,
                       const std::vector<features::SearchMatch>& matches, FrameResult* result);
   /// Motion-only BA on the found matches from `T_guess`; fills the inliers and the found and
@@ -200,6 +218,11 @@ class Tracker {
   MotionPriorEstimator motion_prior_;
   FeatureCandidates candidates_;
   KeyframeTriangulation triangulation_;
+  struct KeyframePoints {  ///< The newest keyframe's map points and their ORB descriptors.
+    std::vector<map::PointId> ids;
+    cv::Mat descriptors;
+  };
+  KeyframePoints keyframe_points_;
   TrackingMap map_;
   TrackingState state_ = TrackingState::kInitializing;
 
