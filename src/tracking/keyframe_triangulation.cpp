@@ -170,6 +170,7 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
   const geometry::SE3 T_other_cur = T_other_world * T_cur_world.inverse();
   if (!(T_other_cur.translation().norm() > 0.0)) return;  // no baseline
   const double cos_min_parallax = std::cos(params_.min_parallax_deg * kDegToRad);
+  const Eigen::Matrix3d E = skew(T_other_cur.translation()) * T_other_cur.rotationMatrix();
   // For each free corner of the current keyframe: the best and second-best descriptor distance
   // among the other keyframe's free corners near its epipolar line.
   constexpr int kNone = -1;
@@ -180,9 +181,14 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
     if (current.used[i]) continue;
     int best = std::numeric_limits<int>::max(), second = best, best_j = kNone;
     const uchar* d_i = current.descriptors.ptr<uchar>(static_cast<int>(i));
+    // The epipolar line of the corner in the other keyframe, scaled to give distances in pixels.
+    Eigen::Vector3d line = E * current.xy[i].homogeneous();
+    const double norm = line.head<2>().norm();
+    if (!(norm > 0.0)) continue;
+    line *= focal_ / norm;
     for (std::size_t j = 0; j < other.px.size(); ++j) {
-      if (other.used[j] || epipolarDistancePx(T_other_cur, current.xy[i], other.xy[j], focal_) >
-                               params_.max_epipolar_px) {
+      if (other.used[j] ||
+          std::abs(line.dot(other.xy[j].homogeneous())) > params_.max_epipolar_px) {
         continue;
       }
       const int d = cv::hal::normHamming(d_i, other.descriptors.ptr<uchar>(static_cast<int>(j)),

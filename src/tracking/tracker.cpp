@@ -375,7 +375,7 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
   result->has_pose = true;
   result->T_cam_world = initial->T_second_first;
   result->num_inliers = static_cast<int>(previous_measurements_.size());
-  describeKeyframePoints(second, image);
+  rememberKeyframePoints(second, image);
   result->keyframes.push_back(std::move(first));
   result->keyframes.push_back(std::move(second));
 }

@@ -238,7 +238,7 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
-  describeKeyframePoints(message, image);
+  rememberKeyframePoints(message, image);
   result->keyframes.push_back(std::move(message));
 }
 

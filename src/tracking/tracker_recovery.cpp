@@ -1,6 +1,7 @@
-#include <cmath>
 // Tracker: a frame the flow could not carry, tracked again from the newest keyframe's map points
 // matched by descriptor (the rest is in tracker.cpp and tracker_frame.cpp).
+
+#include <cmath>
 
 #include <opencv2/calib3d.hpp>
 
@@ -12,29 +13,37 @@ namespace {
 constexpr int kRecoveryCorners = 1000;  ///< Corners of the frame described for the recovery.
 }  // namespace
 
-void Tracker::describeKeyframePoints(const map::KeyframeMessage& message,
+void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
                                      const features::ImagePyramid& image) {
   keyframe_points_ = {};
   if (!params_.recover_from_keyframe) return;
-  std::vector<cv::KeyPoint> corners;
-  std::vector<map::PointId> ids;
+  keyframe_points_.image = image.base();  // shared, not copied
   for (const map::Observation& o : message.keyframe.observations) {
-    if (!map_.hasPoint(o.point_id)) continue;
     const std::optional<Eigen::Vector2d> px = camera_->project(o.xy.homogeneous());  // measured
     if (!px) continue;
     cv::KeyPoint corner(static_cast<float>(px->x()), static_cast<float>(px->y()), 31.0f);
-    corner.class_id = static_cast<int>(ids.size());
-    corners.push_back(corner);
-    ids.push_back(o.point_id);
+    corner.class_id = static_cast<int>(keyframe_points_.ids.size());
+    keyframe_points_.corners.push_back(corner);
+    keyframe_points_.ids.push_back(o.point_id);
   }
-  keyframe_points_.descriptors = describeCorners(image.base(), &corners);
-  for (const cv::KeyPoint& corner : corners)
-    keyframe_points_.ids.push_back(ids[corner.class_id]);
 }
 
-std::optional<geometry::SE3> Tracker::poseFromKeyframePoints(
-    const features::ImagePyramid& image, const features::CornerGrid& corners) const {
+void Tracker::describeKeyframePoints() {
+  if (keyframe_points_.described) return;
+  keyframe_points_.described = true;
+  std::vector<cv::KeyPoint> corners = std::move(keyframe_points_.corners);
+  keyframe_points_.descriptors = describeCorners(keyframe_points_.image, &corners);
+  std::vector<map::PointId> ids;
+  for (const cv::KeyPoint& corner : corners)
+    ids.push_back(keyframe_points_.ids[corner.class_id]);
+  keyframe_points_.ids = std::move(ids);
+  keyframe_points_.image.release();
+}
+
+std::optional<geometry::SE3> Tracker::poseFromKeyframePoints(const features::ImagePyramid& image,
+                                                             const features::CornerGrid& corners) {
   const int min_matches = params_.min_inliers;
+  describeKeyframePoints();
   if (static_cast<int>(keyframe_points_.ids.size()) < min_matches) return std::nullopt;
   std::vector<cv::KeyPoint> keypoints = features::distributeQuadtree(
       corners.corners(), kRecoveryCorners, camera_->width(), camera_->height());

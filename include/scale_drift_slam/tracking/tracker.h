@@ -170,13 +170,15 @@ class Tracker {
                       std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                       FrameResult* result);
   /// The points' search statistics (retirement) and the visible count of `result`.
-  /// The newest keyframe's map points described (ORB) for recoverFromKeyframe.
-  void describeKeyframePoints(const map::KeyframeMessage& message,
+  /// The newest keyframe's map points and image, for recoverFromKeyframe...
+  void rememberKeyframePoints(const map::KeyframeMessage& message,
                               const features::ImagePyramid& image);
+  /// ...described (ORB) the first time a frame needs them (most keyframes never do).
+  void describeKeyframePoints();
   /// The pose from the newest keyframe's points matched by descriptor in this frame (PnP RANSAC,
   /// refined by the motion-only BA); nothing when too few match.
   std::optional<geometry::SE3> poseFromKeyframePoints(const features::ImagePyramid& image,
-                                                      const features::CornerGrid& corners) const;
+                                                      const features::CornerGrid& corners);
   /// Active search around that pose; keeps the new matches and pose when they give more inliers.
   void recoverFromKeyframe(const features::ImagePyramid& image, const features::CornerGrid& corners,
                            const std::vector<map::PointId>& ids,
@@ -220,6 +222,9 @@ class Tracker {
   KeyframeTriangulation triangulation_;
   struct KeyframePoints {  ///< The newest keyframe's map points and their ORB descriptors.
     std::vector<map::PointId> ids;
+    std::vector<cv::KeyPoint> corners;  ///< Their measured pixels, until described.
+    cv::Mat image;                      ///< The keyframe's image, until described.
+    bool described = false;
     cv::Mat descriptors;
   };
   KeyframePoints keyframe_points_;
