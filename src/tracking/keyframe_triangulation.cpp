@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include <opencv2/core/hal/hal.hpp>
+#include <opencv2/video/tracking.hpp>
 
 namespace scale_drift_slam::tracking {
 namespace {
@@ -13,6 +14,8 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 /// ORB's patch: corners closer to the border than its radius get no descriptor.
 constexpr int kOrbPatchSize = 31;
+/// A match whose alignment moves the other keyframe's pixel farther than this is dropped.
+constexpr double kMaxRefinementPx = 2.0;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -124,6 +127,7 @@ KeyframeTriangulation::Described KeyframeTriangulation::describe(
     const std::vector<Eigen::Vector2d>& occupied, const geometry::CameraModel& camera) const {
   Described described;
   described.id = id;
+  described.image = image.base();  // shared, not copied
   std::vector<cv::KeyPoint> corners =
       features::detectSpreadCorners(image.base(), params_.max_features, detection_, occupied);
   described.descriptors = describeCorners(image.base(), &corners);
@@ -146,11 +150,12 @@ std::vector<TriangulatedPoint> KeyframeTriangulation::addKeyframe(
   // The newest earlier keyframe first: the smallest change of view, the most matches.
   for (auto it = recent_.rbegin(); it != recent_.rend(); ++it) {
     const std::optional<geometry::SE3> T_other_world = pose_of(it->id);
-    if (T_other_world) match(current, T_kf_world, *it, *T_other_world, &points);
+    if (T_other_world) match(current, T_kf_world, *it, *T_other_world, camera, &points);
   }
   // Keep only the unmatched corners of the new keyframe for the next ones.
   Described kept;
   kept.id = id;
+  kept.image = current.image;
   for (std::size_t i = 0; i < current.px.size(); ++i) {
     if (current.used[i]) continue;
     kept.px.push_back(current.px[i]);
@@ -164,12 +169,8 @@ std::vector<TriangulatedPoint> KeyframeTriangulation::addKeyframe(
   return points;
 }
 
-void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur_world,
-                                  Described& other, const geometry::SE3& T_other_world,
-                                  std::vector<TriangulatedPoint>* points) const {
-  const geometry::SE3 T_other_cur = T_other_world * T_cur_world.inverse();
-  if (!(T_other_cur.translation().norm() > 0.0)) return;  // no baseline
-  const double cos_min_parallax = std::cos(params_.min_parallax_deg * kDegToRad);
+std::vector<std::pair<int, int>> KeyframeTriangulation::matchAlongEpipolarLines(
+    const Described& current, const Described& other, const geometry::SE3& T_other_cur) const {
   const Eigen::Matrix3d E = skew(T_other_cur.translation()) * T_other_cur.rotationMatrix();
   // For each free corner of the current keyframe: the best and second-best descriptor distance
   // among the other keyframe's free corners near its epipolar line.
@@ -209,18 +210,64 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
       best_of_other[best_j] = static_cast<int>(i);
     }
   }
-  const Eigen::Vector3d c_cur = T_cur_world.inverseTranslation();
-  const Eigen::Vector3d c_other = T_other_world.inverseTranslation();
+  std::vector<std::pair<int, int>> pairs;
   for (std::size_t i = 0; i < current.px.size(); ++i) {
     const int j = match_of_current[i];
-    if (j == kNone || best_of_other[j] != static_cast<int>(i)) continue;  // not mutual
+    if (j != kNone && best_of_other[j] == static_cast<int>(i))  // mutual
+      pairs.emplace_back(static_cast<int>(i), j);
+  }
+  return pairs;
+}
+
+std::vector<std::optional<Eigen::Vector2d>> KeyframeTriangulation::refine(
+    const Described& current, const Described& other,
+    const std::vector<std::pair<int, int>>& pairs) const {
+  // FAST corners sit on whole pixels and two corners detected independently need not be the same
+  // image point: the other keyframe's pixel is aligned to the current one's patch (Lucas-Kanade
+  // from the match, one level), so that the two rays meet where the texture does.
+  std::vector<std::optional<Eigen::Vector2d>> refined(pairs.size());
+  if (pairs.empty() || current.image.empty() || other.image.empty()) return refined;
+  std::vector<cv::Point2f> from, to;
+  for (const auto& [i, j] : pairs) {
+    from.emplace_back(static_cast<float>(current.px[i].x()), static_cast<float>(current.px[i].y()));
+    to.emplace_back(static_cast<float>(other.px[j].x()), static_cast<float>(other.px[j].y()));
+  }
+  std::vector<unsigned char> ok;
+  std::vector<float> error;
+  cv::calcOpticalFlowPyrLK(
+      current.image, other.image, from, to, ok, error, cv::Size(11, 11), 0,
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01),
+      cv::OPTFLOW_USE_INITIAL_FLOW);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const Eigen::Vector2d px(to[k].x, to[k].y);
+    if (ok[k] && (px - other.px[pairs[k].second]).norm() <= kMaxRefinementPx) refined[k] = px;
+  }
+  return refined;
+}
+
+void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur_world,
+                                  Described& other, const geometry::SE3& T_other_world,
+                                  const geometry::CameraModel& camera,
+                                  std::vector<TriangulatedPoint>* points) const {
+  const geometry::SE3 T_other_cur = T_other_world * T_cur_world.inverse();
+  if (!(T_other_cur.translation().norm() > 0.0)) return;  // no baseline
+  const double cos_min_parallax = std::cos(params_.min_parallax_deg * kDegToRad);
+  const std::vector<std::pair<int, int>> pairs =
+      matchAlongEpipolarLines(current, other, T_other_cur);
+  const std::vector<std::optional<Eigen::Vector2d>> refined = refine(current, other, pairs);
+  const Eigen::Vector3d c_cur = T_cur_world.inverseTranslation();
+  const Eigen::Vector3d c_other = T_other_world.inverseTranslation();
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (!refined[k]) continue;
+    const auto [i, j] = pairs[k];
+    const Eigen::Vector2d xy_other = camera.undistortToNormalized(*refined[k]);
     const std::optional<Eigen::Vector3d> p =
-        triangulateMidpoint(T_cur_world, current.xy[i], T_other_world, other.xy[j]);
+        triangulateMidpoint(T_cur_world, current.xy[i], T_other_world, xy_other);
     if (!p) continue;
     const Eigen::Vector3d in_cur = T_cur_world * *p, in_other = T_other_world * *p;
     if (!(in_cur.z() > 0.0 && in_other.z() > 0.0)) continue;
     const double error_cur = focal_ * (in_cur.head<2>() / in_cur.z() - current.xy[i]).norm();
-    const double error_other = focal_ * (in_other.head<2>() / in_other.z() - other.xy[j]).norm();
+    const double error_other = focal_ * (in_other.head<2>() / in_other.z() - xy_other).norm();
     if (error_cur > params_.max_reprojection_px || error_other > params_.max_reprojection_px)
       continue;
     const Eigen::Vector3d ray_cur = (*p - c_cur).normalized(),
@@ -228,7 +275,7 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
     if (ray_cur.dot(ray_other) > cos_min_parallax) continue;
     current.used[i] = true;
     other.used[j] = true;
-    points->push_back({*p, current.px[i], current.xy[i], other.id, other.xy[j]});
+    points->push_back({*p, current.px[i], current.xy[i], other.id, xy_other});
   }
 }
 

@@ -12,6 +12,7 @@
 #include <deque>
 #include <functional>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -92,14 +93,25 @@ class KeyframeTriangulation {
     std::vector<Eigen::Vector2d> px, xy;
     cv::Mat descriptors;  ///< One row (32 bytes) per corner.
     std::vector<bool> used;
+    cv::Mat image;  ///< The keyframe's grey image (shared with its pyramid).
   };
 
   Described describe(map::KeyframeId id, const features::ImagePyramid& image,
                      const std::vector<Eigen::Vector2d>& occupied,
                      const geometry::CameraModel& camera) const;
+  /// Mutual best descriptor matches (current index, other index) near the epipolar lines.
+  std::vector<std::pair<int, int>> matchAlongEpipolarLines(const Described& current,
+                                                           const Described& other,
+                                                           const geometry::SE3& T_other_cur) const;
+  /// The other keyframe's pixel of each pair aligned to the current one's patch; nothing when
+  /// the alignment fails or moves it by more than 2 px.
+  std::vector<std::optional<Eigen::Vector2d>> refine(
+      const Described& current, const Described& other,
+      const std::vector<std::pair<int, int>>& pairs) const;
   /// Matches the new keyframe's free corners with one earlier keyframe's; appends the points.
   void match(Described& current, const geometry::SE3& T_cur_world, Described& other,
-             const geometry::SE3& T_other_world, std::vector<TriangulatedPoint>* points) const;
+             const geometry::SE3& T_other_world, const geometry::CameraModel& camera,
+             std::vector<TriangulatedPoint>* points) const;
 
   KeyframeTriangulationParams params_;
   features::FeatureDetectionParams detection_;
