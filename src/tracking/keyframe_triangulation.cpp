@@ -240,7 +240,10 @@ std::vector<std::optional<Eigen::Vector2d>> KeyframeTriangulation::refine(
       cv::OPTFLOW_USE_INITIAL_FLOW);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const Eigen::Vector2d px(to[k].x, to[k].y);
-    if (ok[k] && (px - other.px[pairs[k].second]).norm() <= kMaxRefinementPx) refined[k] = px;
+    // Moved far (or lost): the texture changed too much between the views for the alignment;
+    // the corner as found is the better estimate.
+    const bool aligned = ok[k] && (px - other.px[pairs[k].second]).norm() <= kMaxRefinementPx;
+    refined[k] = aligned ? px : other.px[pairs[k].second];
   }
   return refined;
 }
