@@ -51,6 +51,7 @@ void TrackerParams::validate() const {
   motion_ba.validate();
   candidates.validate();
   keyframes.validate();
+  triangulation.validate();
 }
 
 std::string trackingStateName(TrackingState state) {
@@ -90,7 +91,8 @@ Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const Trac
       field_of_view_(camera_ ? narrowestFieldOfView(*camera_) : 0.0),
       initializer_(camera_, params.initializer, params.features, params.motion_prior.flow),
       motion_prior_(params.motion_prior, params.motion_ba),
-      candidates_(params.candidates, params.features, focal_) {
+      candidates_(params.candidates, params.features, focal_),
+      triangulation_(params.triangulation, params.features, focal_) {
   params_.validate();
 }
 
@@ -365,11 +367,15 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
   T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
   previous_image_ = image;
   last_scene_depth_ = sceneDepth(initial->T_second_first);
+  // The second keyframe's free corners wait for the next keyframe to be matched with.
+  std::vector<Eigen::Vector2d> taken = occupied;
+  addTriangulatedPoints(second.keyframe.id, initial->T_second_first, image, &taken, &second);
   candidates_.spawn(second.keyframe.id, initial->T_second_first, image, occupied, last_scene_depth_,
                     *camera_);
   result->has_pose = true;
   result->T_cam_world = initial->T_second_first;
   result->num_inliers = static_cast<int>(previous_measurements_.size());
+  rememberKeyframePoints(second, image);
   result->keyframes.push_back(std::move(first));
   result->keyframes.push_back(std::move(second));
 }

@@ -33,6 +33,10 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
     researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
                    &T_cam_world, result);
   }
+  if (params_.recover_from_keyframe && result->num_inliers < params_.good_inliers) {
+    recoverFromKeyframe(image, corners, ids, search_points, &matches, &inliers, &T_cam_world,
+                        result);
+  }
   recordSearches(ids, matches, result);
   result->times.motion_ba = stage.lapMs();
 
@@ -231,9 +235,36 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
     }
     if (const auto px = camera_->project(T_kf_world * feature.p_world)) occupied.push_back(*px);
   }
+  addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
+  rememberKeyframePoints(message, image);
   result->keyframes.push_back(std::move(message));
+}
+
+void Tracker::addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& T_kf_world,
+                                    const features::ImagePyramid& image,
+                                    std::vector<Eigen::Vector2d>* occupied,
+                                    map::KeyframeMessage* message) {
+  // The candidates' corners stay theirs: their filters will promote them.
+  std::vector<Eigen::Vector2d> taken = *occupied;
+  for (const cv::Point2f& px : candidates_.pixels())
+    taken.emplace_back(px.x, px.y);
+  const auto pose_of = [this](map::KeyframeId id) -> std::optional<geometry::SE3> {
+    if (!map_.hasKeyframe(id)) return std::nullopt;
+    return map_.keyframe(id).T_kf_world;
+  };
+  for (const TriangulatedPoint& point :
+       triangulation_.addKeyframe(kf_id, T_kf_world, image, taken, *camera_, pose_of)) {
+    features::PointAppearance appearance;
+    if (!appearance.cut(image, point.px)) continue;
+    const map::PointId id = addNewPoint(point.p_world, kf_id, std::move(appearance), message);
+    message->keyframe.observations.push_back({id, point.xy});
+    message->earlier_observations.push_back({point.other, id, point.other_xy});
+    map_.linkPoint(kf_id, id);
+    map_.linkPoint(point.other, id);
+    occupied->push_back(point.px);
+  }
 }
 
 }  // namespace scale_drift_slam::tracking

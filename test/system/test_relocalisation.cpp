@@ -33,12 +33,24 @@ cv::Mat renderView(const std::vector<test::TexturedPlane>& room, const geometry:
   return test::renderPlanes(room, cam.K(), cameraPose(k).inverse(), kWidth, kHeight);
 }
 
-TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
+/// Maps the room over frames 0-79 of the sweep, covers the camera (five black frames: lost) and
+/// uncovers it where it was at frame 30, about 1.3 m from where it was lost; frames 30-44 follow.
+/// Returns the first frame with a pose after the cover (-1: none) and the worst position error
+/// from there; `relocalised` says whether that first pose came from the loop closer's answer.
+struct Uncovered {
+  int first_posed = -1;
+  bool relocalised = false;
+  double worst_error = 0.0;
+  int relocalisations = 0;
+};
+
+Uncovered coverAndUncover(bool recover_from_keyframe) {
   const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto cam = camera();
   system::SlamParams params;
   params.mapping_thread = false;
   params.loop.recognition.online_training_keyframes = 5;  // a short run: learn the words early
+  params.tracker.recover_from_keyframe = recover_from_keyframe;
   system::SlamSystem slam(cam, params);
   const auto render = [&](int k) { return renderView(room, *cam, k); };
   std::vector<Eigen::Vector3d> estimate, truth;
@@ -49,7 +61,8 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
     estimate.push_back(r.T_cam_world.inverseTranslation());
     truth.push_back(cameraPose(k).translation());
   }
-  ASSERT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
+  EXPECT_EQ(slam.tracker().state(), tracking::TrackingState::kGood);
+  if (slam.tracker().state() != tracking::TrackingState::kGood) return {};
   const geometry::Sim3 S_truth_map = evaluation::alignSim3(estimate, truth);
 
   // Covered: black frames are rejected, and after three of them tracking is lost.
@@ -63,23 +76,47 @@ TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
     }
   }
   // Uncovered where it was at frame 30, about 1.3 m from where it was lost.
-  int first_relocalised = -1;
-  double worst_error = 0.0;
+  Uncovered result;
   for (int k = 30; k < 45; ++k) {
     const tracking::FrameResult r =
         slam.processFrame(9.0 + 0.1 * k, render(k), features::PixelEncoding::kMono8);
-    if (first_relocalised < 0 && r.relocalised) first_relocalised = k;
-    if (first_relocalised < 0 || !r.has_pose) continue;
+    if (result.first_posed < 0 && r.has_pose) {
+      result.first_posed = k;
+      result.relocalised = r.relocalised;
+    }
+    if (result.first_posed < 0 || !r.has_pose) continue;
     EXPECT_NE(r.state, tracking::TrackingState::kLost) << "frame " << k << ": " << r.message;
     const Eigen::Vector3d centre = S_truth_map * r.T_cam_world.inverseTranslation();
-    worst_error = std::max(worst_error, (centre - cameraPose(k).translation()).norm());
+    result.worst_error =
+        std::max(result.worst_error, (centre - cameraPose(k).translation()).norm());
   }
+  result.relocalisations = slam.relocalisations();
+  return result;
+}
+
+TEST(Relocalisation, ALostCameraIsFoundAgainInTheMapAndTracksOn) {
+  // The loop closer's relocalisation alone: the tracker's own recovery from its newest keyframe
+  // (next test) would find this place first.
+  const Uncovered u = coverAndUncover(false);
   std::printf("relocalised at frame %d (shown from frame 30), worst position error after %.4f m\n",
-              first_relocalised, worst_error);
-  ASSERT_GE(first_relocalised, 30) << "never relocalised";
-  EXPECT_LE(first_relocalised, 33);
-  EXPECT_LT(worst_error, 0.03);
-  EXPECT_GE(slam.relocalisations(), 1);
+              u.first_posed, u.worst_error);
+  ASSERT_GE(u.first_posed, 30) << "never relocalised";
+  EXPECT_TRUE(u.relocalised);
+  EXPECT_LE(u.first_posed, 33);
+  EXPECT_LT(u.worst_error, 0.03);
+  EXPECT_GE(u.relocalisations, 1);
+}
+
+// The same cover, with the tracker's recovery from its newest keyframe (tracker.
+// recover_from_keyframe): much of the far wall seen at frame 30 is in the newest keyframe's view,
+// whose points, matched by descriptor, give the pose at once, without waiting for the loop closer.
+TEST(Relocalisation, ALostCameraBackInViewOfTheNewestKeyframeRecoversByItself) {
+  const Uncovered u = coverAndUncover(true);
+  std::printf("recovered at frame %d (shown from frame 30), worst position error after %.4f m\n",
+              u.first_posed, u.worst_error);
+  ASSERT_EQ(u.first_posed, 30) << "not recovered at the first uncovered frame";
+  EXPECT_FALSE(u.relocalised);
+  EXPECT_LT(u.worst_error, 0.03);
 }
 
 // A request ends when tracking recovers by itself: lost again later, the tracker asks afresh

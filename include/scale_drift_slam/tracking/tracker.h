@@ -22,6 +22,7 @@
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/tracking/feature_candidates.h"
 #include "scale_drift_slam/tracking/keyframe_rule.h"
+#include "scale_drift_slam/tracking/keyframe_triangulation.h"
 #include "scale_drift_slam/tracking/map_initializer.h"
 #include "scale_drift_slam/tracking/motion_prior.h"
 #include "scale_drift_slam/tracking/tracking_map.h"
@@ -54,6 +55,10 @@ struct TrackerParams {
   /// the tracker initialises again (FrameResult::map_restarted). 0 keyframes: never.
   int restart_after_lost_frames = 15;
   int restart_below_keyframes = 30;
+  /// A frame tracked with fewer than good_inliers (the flow could not carry it: a wide baseline
+  /// between frames) is tracked again from the newest keyframe's map points matched by ORB
+  /// descriptor (PnP RANSAC, then active search around that pose); kept when it has more inliers.
+  bool recover_from_keyframe = true;
   features::FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -61,6 +66,7 @@ struct TrackerParams {
   features::MotionOnlyBundleAdjustmentParams motion_ba;
   FeatureCandidateParams candidates;
   KeyframeRuleParams keyframes;
+  KeyframeTriangulationParams triangulation;
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -164,6 +170,22 @@ class Tracker {
                       std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                       FrameResult* result);
   /// The points' search statistics (retirement) and the visible count of `result`.
+  /// The newest keyframe's map points and image, for recoverFromKeyframe...
+  void rememberKeyframePoints(const map::KeyframeMessage& message,
+                              const features::ImagePyramid& image);
+  /// ...described (ORB) the first time a frame needs them (most keyframes never do).
+  void describeKeyframePoints();
+  /// The pose from the newest keyframe's points matched by descriptor in this frame (PnP RANSAC,
+  /// refined by the motion-only BA); nothing when too few match.
+  std::optional<geometry::SE3> poseFromKeyframePoints(const features::ImagePyramid& image,
+                                                      const features::CornerGrid& corners);
+  /// Active search around that pose; keeps the new matches and pose when they give more inliers.
+  void recoverFromKeyframe(const features::ImagePyramid& image, const features::CornerGrid& corners,
+                           const std::vector<map::PointId>& ids,
+                           const std::vector<features::SearchPoint>& search_points,
+                           std::vector<features::SearchMatch>* matches,
+                           std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                           FrameResult* result);
   void recordSearches(const std::vector<map::PointId>& ids,
                       const std::vector<features::SearchMatch>& matches, FrameResult* result);
   /// Motion-only BA on the found matches from `T_guess`; fills the inliers and the found and
@@ -176,6 +198,11 @@ class Tracker {
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
                            features::PointAppearance appearance, map::KeyframeMessage* message);
+  /// New points at keyframe `kf_id` matched with the previous keyframes (keyframe_triangulation.h)
+  /// away from the `occupied` pixels; their pixels are appended to `occupied`.
+  void addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& T_kf_world,
+                             const features::ImagePyramid& image,
+                             std::vector<Eigen::Vector2d>* occupied, map::KeyframeMessage* message);
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                     const features::ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
@@ -192,6 +219,15 @@ class Tracker {
   MapInitializer initializer_;
   MotionPriorEstimator motion_prior_;
   FeatureCandidates candidates_;
+  KeyframeTriangulation triangulation_;
+  struct KeyframePoints {  ///< The newest keyframe's map points and their ORB descriptors.
+    std::vector<map::PointId> ids;
+    std::vector<cv::KeyPoint> corners;  ///< Their measured pixels, until described.
+    cv::Mat image;                      ///< The keyframe's image, until described.
+    bool described = false;
+    cv::Mat descriptors;
+  };
+  KeyframePoints keyframe_points_;
   TrackingMap map_;
   TrackingState state_ = TrackingState::kInitializing;
 

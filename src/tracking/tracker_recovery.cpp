@@ -1,0 +1,124 @@
+// Tracker: a frame the flow could not carry, tracked again from the newest keyframe's map points
+// matched by descriptor (the rest is in tracker.cpp and tracker_frame.cpp).
+
+#include <cmath>
+
+#include <opencv2/calib3d.hpp>
+
+#include "scale_drift_slam/tracking/keyframe_triangulation.h"
+#include "scale_drift_slam/tracking/tracker.h"
+
+namespace scale_drift_slam::tracking {
+namespace {
+constexpr int kRecoveryCorners = 1000;  ///< Corners of the frame described for the recovery.
+}  // namespace
+
+void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
+                                     const features::ImagePyramid& image) {
+  keyframe_points_ = {};
+  if (!params_.recover_from_keyframe) return;
+  keyframe_points_.image = image.base();  // shared, not copied
+  for (const map::Observation& o : message.keyframe.observations) {
+    const std::optional<Eigen::Vector2d> px = camera_->project(o.xy.homogeneous());  // measured
+    if (!px) continue;
+    cv::KeyPoint corner(static_cast<float>(px->x()), static_cast<float>(px->y()), 31.0f);
+    corner.class_id = static_cast<int>(keyframe_points_.ids.size());
+    keyframe_points_.corners.push_back(corner);
+    keyframe_points_.ids.push_back(o.point_id);
+  }
+}
+
+void Tracker::describeKeyframePoints() {
+  if (keyframe_points_.described) return;
+  keyframe_points_.described = true;
+  std::vector<cv::KeyPoint> corners = std::move(keyframe_points_.corners);
+  keyframe_points_.descriptors = describeCorners(keyframe_points_.image, &corners);
+  std::vector<map::PointId> ids;
+  for (const cv::KeyPoint& corner : corners)
+    ids.push_back(keyframe_points_.ids[corner.class_id]);
+  keyframe_points_.ids = std::move(ids);
+  keyframe_points_.image.release();
+}
+
+std::optional<geometry::SE3> Tracker::poseFromKeyframePoints(const features::ImagePyramid& image,
+                                                             const features::CornerGrid& corners) {
+  const int min_matches = params_.min_inliers;
+  describeKeyframePoints();
+  if (static_cast<int>(keyframe_points_.ids.size()) < min_matches) return std::nullopt;
+  std::vector<cv::KeyPoint> keypoints = features::distributeQuadtree(
+      corners.corners(), kRecoveryCorners, camera_->width(), camera_->height());
+  const cv::Mat descriptors = describeCorners(image.base(), &keypoints);
+  const std::vector<int> match = matchDescriptors(keyframe_points_.descriptors, descriptors,
+                                                  params_.triangulation.max_descriptor_distance,
+                                                  params_.triangulation.max_ratio);
+  features::MotionOnlyInput input;
+  input.focal_length_px = focal_;
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> normalised;
+  for (std::size_t i = 0; i < match.size(); ++i) {
+    if (match[i] < 0 || !map_.hasPoint(keyframe_points_.ids[i])) continue;
+    const Eigen::Vector3d& p = map_.point(keyframe_points_.ids[i]).p_world;
+    const cv::Point2f& px = keypoints[match[i]].pt;
+    const Eigen::Vector2d xy = camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y));
+    object.emplace_back(p.x(), p.y(), p.z());
+    normalised.emplace_back(xy.x(), xy.y());
+    input.observations.push_back({p, xy});
+  }
+  cv::Mat rvec, tvec;
+  std::vector<int> pnp_inliers;
+  if (static_cast<int>(object.size()) < min_matches) return std::nullopt;
+  if (!cv::solvePnPRansac(object, normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec,
+                          false, 200, params_.motion_ba.inlier_threshold_px / focal_, 0.99,
+                          pnp_inliers, cv::SOLVEPNP_EPNP) ||
+      static_cast<int>(pnp_inliers.size()) < min_matches) {
+    return std::nullopt;
+  }
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d R_eigen;
+  Eigen::Vector3d t_eigen;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c)
+      R_eigen(r, c) = R.at<double>(r, c);
+    t_eigen(r) = tvec.at<double>(r);
+  }
+  // Refined on the PnP inliers with the tracker's own robust motion-only BA.
+  std::vector<features::PoseObservation> kept;
+  for (const int k : pnp_inliers)
+    kept.push_back(input.observations[k]);
+  input.observations = std::move(kept);
+  input.T_cam_world_guess = geometry::SE3(R_eigen, t_eigen);
+  return features::solveMotionOnlyBundleAdjustment(input, params_.motion_ba).T_cam_world;
+}
+
+void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,
+                                  const features::CornerGrid& corners,
+                                  const std::vector<map::PointId>& ids,
+                                  const std::vector<features::SearchPoint>& search_points,
+                                  std::vector<features::SearchMatch>* matches,
+                                  std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                                  FrameResult* result) {
+  const std::optional<geometry::SE3> T_pnp = poseFromKeyframePoints(image, corners);
+  if (!T_pnp) return;
+  // Around the PnP pose: a few times the prior's floor (the pose rests on a few dozen matches).
+  const double depth = last_scene_depth_ > 0.0 ? last_scene_depth_ : 1.0;
+  const double k = 3.0;
+  Eigen::Matrix<double, 6, 1> d;
+  d << Eigen::Vector3d::Constant(std::pow(k * params_.motion_prior.min_rotation_sigma, 2)),
+      Eigen::Vector3d::Constant(
+          std::pow(k * params_.motion_prior.min_translation_sigma * depth, 2));
+  std::vector<features::SearchMatch> found = features::activeSearch(
+      search_points, *T_pnp, d.asDiagonal(), *camera_, image, corners, params_.search);
+  std::vector<Measurement> more_inliers;
+  FrameResult counts;
+  const geometry::SE3 T = solvePose(*T_pnp, ids, found, &more_inliers, &counts);
+  if (counts.num_inliers <= result->num_inliers) return;
+  *matches = std::move(found);
+  *T_solved = T;
+  *inliers = std::move(more_inliers);
+  result->num_found = counts.num_found;
+  result->num_inliers = counts.num_inliers;
+  result->pose_information = counts.pose_information;
+}
+
+}  // namespace scale_drift_slam::tracking
