@@ -68,6 +68,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"initializer", "min_good_fraction", &t.initializer.two_view.min_good_fraction},
       {"initializer", "ambiguity_ratio", &t.initializer.two_view.ambiguity_ratio},
       {"initializer", "ambiguity_sigmas", &t.initializer.two_view.ambiguity_sigmas},
+      {"initializer", "max_rotation_sigma_ratio", &t.initializer.two_view.max_rotation_sigma_ratio},
       {"initializer", "bundle_adjustment_iterations",
        &t.initializer.two_view.bundle_adjustment_iterations},
       {"flow", "window", &t.motion_prior.flow.window},
