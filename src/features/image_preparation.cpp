@@ -119,7 +119,35 @@ cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding, int mono16_bits) {
   return grey;
 }
 
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
+cv::Mat normalisePhotometry(const cv::Mat& grey, int radius) {
+  if (grey.empty() || grey.type() != CV_8UC1) {
+    throw std::invalid_argument("photometric normalisation needs a non-empty 8-bit grey image");
+  }
+  if (radius < 1) throw std::invalid_argument("photometric normalisation needs a radius >= 1");
+  constexpr float kMinLocalContrast = 8.0f;  // grey levels: flat areas stay flat, not noise
+  cv::Mat value, mean, mean_sq;
+  grey.convertTo(value, CV_32F);
+  const cv::Size box(2 * radius + 1, 2 * radius + 1);
+  cv::boxFilter(value, mean, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT_101);
+  cv::boxFilter(value.mul(value), mean_sq, CV_32F, box, cv::Point(-1, -1), true,
+                cv::BORDER_REFLECT_101);
+  cv::Mat out(grey.size(), CV_8UC1);
+  for (int y = 0; y < grey.rows; ++y) {
+    const float* v = value.ptr<float>(y);
+    const float* m = mean.ptr<float>(y);
+    const float* m2 = mean_sq.ptr<float>(y);
+    unsigned char* o = out.ptr<unsigned char>(y);
+    for (int x = 0; x < grey.cols; ++x) {
+      const float sigma = std::sqrt(std::max(m2[x] - m[x] * m[x], 0.0f));
+      const float n = 128.0f + 32.0f * (v[x] - m[x]) / std::max(sigma, kMinLocalContrast);
+      o[x] = cv::saturate_cast<unsigned char>(n);
+    }
+  }
+  return out;
+}
+
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding,
+                          int photometric_radius) {
   if (grey.empty() || grey.type() != CV_8UC1) {
     throw std::invalid_argument("image pyramid needs a non-empty 8-bit grey image");
   }
@@ -135,6 +163,11 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
   // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
   cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
                               cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  if (photometric_radius > 0) {
+    cv::buildOpticalFlowPyramid(normalisePhotometry(grey, photometric_radius), pyramid.flow_levels,
+                                cv::Size(padding, padding), max_level, false,
+                                cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  }
   return pyramid;
 }
 

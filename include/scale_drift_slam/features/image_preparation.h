@@ -39,6 +39,12 @@ int significantBits(const cv::Mat& mono16);
 /// Every level is an ROI inside a padded buffer, as cv::calcOpticalFlowPyrLK wants it.
 struct ImagePyramid {
   std::vector<cv::Mat> levels;
+  /// The same levels of the photometrically normalised image (normalisePhotometry), which the
+  /// optical flow follows points in when it is on; empty: the flow uses `levels`.
+  std::vector<cv::Mat> flow_levels;
+  const std::vector<cv::Mat>& flowLevels() const {
+    return flow_levels.empty() ? levels : flow_levels;
+  }
   const cv::Mat& base() const { return levels.front(); }
   int numLevels() const { return static_cast<int>(levels.size()); }
 };
@@ -46,7 +52,19 @@ struct ImagePyramid {
 /// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
 /// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
 /// or non-grey image.
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
+/// With `photometric_radius` > 0 it also builds `flow_levels` from
+/// normalisePhotometry(grey, photometric_radius).
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21,
+                          int photometric_radius = 0);
+
+/// Local photometric normalisation for the optical flow: each pixel's difference from the mean
+/// of the (2 radius + 1)^2 box around it, over that box's standard deviation (at least
+/// kMinLocalContrast grey levels), mapped to 128 + 32 x. Lucas-Kanade assumes that a point keeps
+/// its grey level; vignetting (a smooth gain that changes as the point crosses the image), a
+/// changing exposure and light that varies over the scene break that, and the flow is then pulled
+/// along the grey-level gradient: a bias of a fraction of a pixel per frame that is the same for
+/// every point in one part of the image. Divided out locally, the smooth gain and offset cancel.
+cv::Mat normalisePhotometry(const cv::Mat& grey, int radius);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
 /// percentiles is below `target_range`, the grey values are scaled by
