@@ -124,25 +124,11 @@ cv::Mat normalisePhotometry(const cv::Mat& grey, int radius) {
     throw std::invalid_argument("photometric normalisation needs a non-empty 8-bit grey image");
   }
   if (radius < 1) throw std::invalid_argument("photometric normalisation needs a radius >= 1");
-  constexpr float kMinLocalContrast = 8.0f;  // grey levels: flat areas stay flat, not noise
-  cv::Mat value, mean, mean_sq;
-  grey.convertTo(value, CV_32F);
-  const cv::Size box(2 * radius + 1, 2 * radius + 1);
-  cv::boxFilter(value, mean, CV_32F, box, cv::Point(-1, -1), true, cv::BORDER_REFLECT_101);
-  cv::boxFilter(value.mul(value), mean_sq, CV_32F, box, cv::Point(-1, -1), true,
-                cv::BORDER_REFLECT_101);
-  cv::Mat out(grey.size(), CV_8UC1);
-  for (int y = 0; y < grey.rows; ++y) {
-    const float* v = value.ptr<float>(y);
-    const float* m = mean.ptr<float>(y);
-    const float* m2 = mean_sq.ptr<float>(y);
-    unsigned char* o = out.ptr<unsigned char>(y);
-    for (int x = 0; x < grey.cols; ++x) {
-      const float sigma = std::sqrt(std::max(m2[x] - m[x] * m[x], 0.0f));
-      const float n = 128.0f + 32.0f * (v[x] - m[x]) / std::max(sigma, kMinLocalContrast);
-      o[x] = cv::saturate_cast<unsigned char>(n);
-    }
-  }
+  cv::Mat mean;
+  cv::blur(grey, mean, cv::Size(2 * radius + 1, 2 * radius + 1), cv::Point(-1, -1),
+           cv::BORDER_REFLECT_101);
+  cv::Mat out;
+  cv::addWeighted(grey, 1.0, mean, -1.0, 128.0, out);
   return out;
 }
 
@@ -164,9 +150,14 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding,
   cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
                               cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
   if (photometric_radius > 0) {
-    cv::buildOpticalFlowPyramid(normalisePhotometry(grey, photometric_radius), pyramid.flow_levels,
-                                cv::Size(padding, padding), max_level, false,
-                                cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+    // Each level on its own: the coarse levels keep the structure that Lucas-Kanade needs for
+    // large motions (a high-passed image, halved, would be flat there).
+    for (const cv::Mat& level : pyramid.levels) {
+      cv::Mat padded;
+      cv::copyMakeBorder(normalisePhotometry(level, photometric_radius), padded, padding, padding,
+                         padding, padding, cv::BORDER_REFLECT_101);
+      pyramid.flow_levels.push_back(padded(cv::Rect(padding, padding, level.cols, level.rows)));
+    }
   }
   return pyramid;
 }

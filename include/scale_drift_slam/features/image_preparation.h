@@ -52,18 +52,17 @@ struct ImagePyramid {
 /// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
 /// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
 /// or non-grey image.
-/// With `photometric_radius` > 0 it also builds `flow_levels` from
-/// normalisePhotometry(grey, photometric_radius).
+/// With `photometric_radius` > 0 it also builds `flow_levels`: normalisePhotometry of each
+/// level, padded alike.
 ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21,
                           int photometric_radius = 0);
 
 /// Local photometric normalisation for the optical flow: each pixel's difference from the mean
-/// of the (2 radius + 1)^2 box around it, over that box's standard deviation (at least
-/// kMinLocalContrast grey levels), mapped to 128 + 32 x. Lucas-Kanade assumes that a point keeps
-/// its grey level; vignetting (a smooth gain that changes as the point crosses the image), a
-/// changing exposure and light that varies over the scene break that, and the flow is then pulled
-/// along the grey-level gradient: a bias of a fraction of a pixel per frame that is the same for
-/// every point in one part of the image. Divided out locally, the smooth gain and offset cancel.
+/// of the (2 radius + 1)^2 box around it, plus 128. Lucas-Kanade assumes that a point keeps its
+/// grey level; vignetting (a smooth gain that changes as the point crosses the image), a changing
+/// exposure and light that varies over the scene break that, and the flow is then pulled along
+/// the grey-level gradient of the patch's mean level: a bias of a fraction of a pixel per frame,
+/// the same for every point in one part of the image. Without the local mean that bias goes.
 cv::Mat normalisePhotometry(const cv::Mat& grey, int radius);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
