@@ -124,11 +124,19 @@ cv::Mat normalisePhotometry(const cv::Mat& grey, int radius) {
     throw std::invalid_argument("photometric normalisation needs a non-empty 8-bit grey image");
   }
   if (radius < 1) throw std::invalid_argument("photometric normalisation needs a radius >= 1");
-  cv::Mat mean;
-  cv::blur(grey, mean, cv::Size(2 * radius + 1, 2 * radius + 1), cv::Point(-1, -1),
-           cv::BORDER_REFLECT_101);
-  cv::Mat out;
-  cv::addWeighted(grey, 1.0, mean, -1.0, 128.0, out);
+  // In 8 and 16 bits (the float version cost 4 ms per 640x480 frame): the local contrast is
+  // the box mean of the absolute difference from the box mean, at least kMinLocalContrast.
+  constexpr int kMinLocalContrast = 6;  // grey levels: flat areas and their noise stay flat
+  const cv::Size box(2 * radius + 1, 2 * radius + 1);
+  cv::Mat mean, deviation, contrast, difference, contrast16, normalised, out;
+  cv::blur(grey, mean, box, cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+  cv::absdiff(grey, mean, deviation);
+  cv::blur(deviation, contrast, box, cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+  cv::max(contrast, kMinLocalContrast, contrast);
+  cv::subtract(grey, mean, difference, cv::noArray(), CV_16S);
+  contrast.convertTo(contrast16, CV_16S);
+  cv::divide(difference, contrast16, normalised, 26.0, CV_16S);
+  normalised.convertTo(out, CV_8U, 1.0, 128.0);
   return out;
 }
 

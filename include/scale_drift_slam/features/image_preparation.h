@@ -58,11 +58,13 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21,
                           int photometric_radius = 0);
 
 /// Local photometric normalisation for the optical flow: each pixel's difference from the mean
-/// of the (2 radius + 1)^2 box around it, plus 128. Lucas-Kanade assumes that a point keeps its
-/// grey level; vignetting (a smooth gain that changes as the point crosses the image), a changing
-/// exposure and light that varies over the scene break that, and the flow is then pulled along
-/// the grey-level gradient of the patch's mean level: a bias of a fraction of a pixel per frame,
-/// the same for every point in one part of the image. Without the local mean that bias goes.
+/// of the (2 radius + 1)^2 box around it over that box's mean absolute deviation (at least 6 grey
+/// levels, so that flat areas and their noise stay flat), mapped to 128 + 26 x. Lucas-Kanade
+/// assumes that a point keeps its grey level; vignetting (a smooth gain that changes as the point
+/// crosses the image), a changing exposure and light that varies over the scene break that, and
+/// the flow is then pulled along the patch's grey-level gradient: a bias of a fraction of a pixel
+/// per frame, the same for every point in one part of the image. A smooth gain and offset cancel
+/// here.
 cv::Mat normalisePhotometry(const cv::Mat& grey, int radius);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
