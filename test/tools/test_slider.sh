@@ -13,7 +13,7 @@ work="${SDS_TEST_OUTPUT_DIR:?}/slider"
 checks="$(dirname "${BASH_SOURCE[0]}")/effects_checks.py"
 rm -rf "$work"
 mkdir -p "$work"
-printf 'system:\n  mapping_thread: false\n' > "$work/inline.yaml"
+printf 'system:\n  mapping_thread: false\nflow:\n  photometric_radius: 7\n' > "$work/inline.yaml"
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
