@@ -119,7 +119,29 @@ cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding, int mono16_bits) {
   return grey;
 }
 
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
+cv::Mat normalisePhotometry(const cv::Mat& grey, int radius) {
+  if (grey.empty() || grey.type() != CV_8UC1) {
+    throw std::invalid_argument("photometric normalisation needs a non-empty 8-bit grey image");
+  }
+  if (radius < 1) throw std::invalid_argument("photometric normalisation needs a radius >= 1");
+  // In 8 and 16 bits (the float version cost 4 ms per 640x480 frame): the local contrast is
+  // the box mean of the absolute difference from the box mean, at least kMinLocalContrast.
+  constexpr int kMinLocalContrast = 6;  // grey levels: flat areas and their noise stay flat
+  const cv::Size box(2 * radius + 1, 2 * radius + 1);
+  cv::Mat mean, deviation, contrast, difference, contrast16, normalised, out;
+  cv::blur(grey, mean, box, cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+  cv::absdiff(grey, mean, deviation);
+  cv::blur(deviation, contrast, box, cv::Point(-1, -1), cv::BORDER_REFLECT_101);
+  cv::max(contrast, kMinLocalContrast, contrast);
+  cv::subtract(grey, mean, difference, cv::noArray(), CV_16S);
+  contrast.convertTo(contrast16, CV_16S);
+  cv::divide(difference, contrast16, normalised, 26.0, CV_16S);
+  normalised.convertTo(out, CV_8U, 1.0, 128.0);
+  return out;
+}
+
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding,
+                          int photometric_radius) {
   if (grey.empty() || grey.type() != CV_8UC1) {
     throw std::invalid_argument("image pyramid needs a non-empty 8-bit grey image");
   }
@@ -135,6 +157,16 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
   // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
   cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
                               cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  if (photometric_radius > 0) {
+    // Each level on its own: the coarse levels keep the structure that Lucas-Kanade needs for
+    // large motions (a high-passed image, halved, would be flat there).
+    for (const cv::Mat& level : pyramid.levels) {
+      cv::Mat padded;
+      cv::copyMakeBorder(normalisePhotometry(level, photometric_radius), padded, padding, padding,
+                         padding, padding, cv::BORDER_REFLECT_101);
+      pyramid.flow_levels.push_back(padded(cv::Rect(padding, padding, level.cols, level.rows)));
+    }
+  }
   return pyramid;
 }
 

@@ -9,7 +9,8 @@ namespace scale_drift_slam::sim {
 
 std::vector<std::string> scenarioNames() {
   return {"courtyard_loop", "office_orbit", "corridor_straight", "sphere_flyover", "desk",
-          "office_pan",     "city_block",   "city_loop",         "city_tour",      "facade_grid"};
+          "office_pan",     "city_block",   "city_loop",         "city_tour",      "facade_grid",
+          "slider"};
 }
 
 Scenario makeScenario(const std::string& name, std::uint32_t seed, const ScenarioOptions& options) {
@@ -33,6 +34,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed, const Scenari
   if (name == "desk") return detail::makeDesk(seed);
   if (name == "office_pan") return detail::makeOfficePan(seed);
   if (name == "facade_grid") return detail::makeFacadeGrid(seed);
+  if (name == "slider") return detail::makeSlider(seed);
   std::string known;
   for (const std::string& n : scenarioNames())
     known += (known.empty() ? "" : ", ") + n;
@@ -42,6 +44,7 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed, const Scenari
 Eigen::Vector2i defaultImageSize(const std::string& name) {
   // The driving scenes have a KITTI-like camera; the others a VGA one.
   if (name.rfind("city_", 0) == 0) return {1241, 376};
+  if (name == "slider") return {240, 180};  // DAVIS240C
   return {640, 480};
 }
 

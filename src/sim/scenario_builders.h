@@ -16,6 +16,7 @@ Scenario makeSphereFlyover(std::uint32_t seed);
 Scenario makeDesk(std::uint32_t seed);
 Scenario makeFacadeGrid(std::uint32_t seed);
 Scenario makeOfficePan(std::uint32_t seed);
+Scenario makeSlider(std::uint32_t seed);
 Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options);
 Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options);
 Scenario makeCityTour(std::uint32_t seed, const ScenarioOptions& options);

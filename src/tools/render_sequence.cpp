@@ -19,7 +19,7 @@ const char* kUsage =
     "usage: render_sequence --scene NAME --out DIR [--bag FILE] [--seed N] [options]\n"
     "Renders a synthetic image sequence with exact ground truth (doc/sequences.md).\n"
     "Scenes: courtyard_loop, office_orbit, corridor_straight, sphere_flyover, desk, office_pan,\n"
-    "city_block, city_loop, city_tour, facade_grid.\n"
+    "city_block, city_loop, city_tour, facade_grid, slider.\n"
     "Writes DIR/rgb.txt, DIR/rgb/<stamp>.png, DIR/groundtruth.txt (camera pose in the world, "
     "TUM),\n"
     "DIR/camera.yaml; with --bag FILE also a rosbag (/camera/image_raw, /camera/camera_info,\n"

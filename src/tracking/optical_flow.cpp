@@ -26,6 +26,8 @@ void OpticalFlowParams::validate() const {
   if (!(max_error > 0.0)) throw std::invalid_argument("flow.max_error must be > 0");
   if (dis_preset < 0 || dis_preset > 2)
     throw std::invalid_argument("flow.dis_preset must be 0, 1 or 2");
+  if (photometric_radius < 0 || photometric_radius > 50)
+    throw std::invalid_argument("flow.photometric_radius must be in [0, 50]");
 }
 
 OpticalFlow::OpticalFlow(const OpticalFlowParams& params) : params_(params) {
@@ -65,8 +67,10 @@ void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
                                    std::vector<cv::Point2f>* to,
                                    std::vector<unsigned char>* ok) const {
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
-  const std::vector<cv::Mat> prev_levels(previous.levels.begin(), previous.levels.begin() + levels);
-  const std::vector<cv::Mat> cur_levels(current.levels.begin(), current.levels.begin() + levels);
+  const std::vector<cv::Mat> prev_levels(previous.flowLevels().begin(),
+                                         previous.flowLevels().begin() + levels);
+  const std::vector<cv::Mat> cur_levels(current.flowLevels().begin(),
+                                        current.flowLevels().begin() + levels);
   if (start) *to = *start;
   lucasKanadePass(prev_levels, cur_levels, from, start != nullptr, to, ok);
   if (start) {
@@ -128,8 +132,10 @@ void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
                                 double max_px) const {
   if (from.empty()) return;
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
-  const std::vector<cv::Mat> prev_levels(previous.levels.begin(), previous.levels.begin() + levels);
-  const std::vector<cv::Mat> cur_levels(current.levels.begin(), current.levels.begin() + levels);
+  const std::vector<cv::Mat> prev_levels(previous.flowLevels().begin(),
+                                         previous.flowLevels().begin() + levels);
+  const std::vector<cv::Mat> cur_levels(current.flowLevels().begin(),
+                                        current.flowLevels().begin() + levels);
   std::vector<cv::Point2f> back = from;
   std::vector<unsigned char> back_ok;
   std::vector<float> error;

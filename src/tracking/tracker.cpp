@@ -131,7 +131,8 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   }
   rejected_in_row_ = 0;
   const features::ImagePyramid pyramid =
-      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
+      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window,
+                             params_.motion_prior.flow.photometric_radius);
   result.times.prepare = stage.lapMs();
   try {
     if (state_ == TrackingState::kInitializing) {

@@ -3,13 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
 #include "scale_drift_slam/common/statistics.h"
+#include "scale_drift_slam/geometry/so3.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -35,6 +39,7 @@ void TwoViewParams::validate() const {
   if (!(ambiguity_sigmas >= 0.0)) {
     throw std::invalid_argument("initializer.ambiguity_sigmas must be >= 0");
   }
+  positive(max_rotation_sigma_ratio, "max_rotation_sigma_ratio");
   if (bundle_adjustment_iterations < 0) {
     throw std::invalid_argument("initializer.bundle_adjustment_iterations must be >= 0");
   }
@@ -291,6 +296,50 @@ Decision resolveAmbiguity(const std::vector<Hypothesis>& sorted, const Correspon
   return decision;
 }
 
+// Standard deviation (degrees, the largest over axes) of the rotation of a two-view
+// reconstruction, from the Gauss-Newton information of the second view's reprojection errors
+// (sigma_px each) with every point's inverse depth along its first-view ray marginalised out and
+// the translation free on its sphere. Small baselines seen through a narrow lens leave the
+// rotation and the translation across the view nearly interchangeable (the bas-relief
+// ambiguity): the points' depths absorb the difference, the reprojection errors hardly change,
+// and this deviation is large.
+double rotationSigmaDeg(const geometry::SE3& T, const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<bool>& use, double focal, double sigma_px) {
+  const Eigen::Matrix3d R = T.rotation().toRotationMatrix();
+  const Eigen::Vector3d t = T.translation();
+  if (t.norm() < 1e-12) return std::numeric_limits<double>::infinity();
+  Eigen::Vector3d e1 = t.unitOrthogonal(), e2 = t.normalized().cross(e1);
+  Eigen::Matrix<double, 5, 5> H = Eigen::Matrix<double, 5, 5>::Zero();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!use[i] || !(points[i].z() > 0.0)) continue;
+    const double rho = 1.0 / points[i].z();
+    const Eigen::Vector3d bearing = points[i] * rho;  // (x, y, 1) of the first view
+    const Eigen::Vector3d Rp = R * points[i];
+    const Eigen::Vector3d q = Rp + t;
+    if (!(q.z() > 0.0)) continue;
+    Eigen::Matrix<double, 2, 3> dpi;
+    dpi << 1.0 / q.z(), 0.0, -q.x() / (q.z() * q.z()), 0.0, 1.0 / q.z(), -q.y() / (q.z() * q.z());
+    dpi *= focal;
+    Eigen::Matrix<double, 3, 5> dq;
+    dq.leftCols<3>() = -geometry::hatSO3(Rp);
+    dq.col(3) = e1;
+    dq.col(4) = e2;
+    const Eigen::Matrix<double, 2, 5> Jc = dpi * dq;
+    const Eigen::Vector2d Jr = dpi * (R * (-bearing / (rho * rho)));
+    const double hrr = Jr.squaredNorm();
+    H += Jc.transpose() * Jc;
+    if (hrr > 1e-18) H -= (Jc.transpose() * Jr) * (Jr.transpose() * Jc) / hrr;
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(H);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0))
+    return std::numeric_limits<double>::infinity();
+  const Eigen::Matrix<double, 5, 5> cov = ldlt.solve(Eigen::Matrix<double, 5, 5>::Identity());
+  const double max_var = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov.topLeftCorner<3, 3>())
+                             .eigenvalues()
+                             .maxCoeff();
+  return sigma_px * std::sqrt(std::max(max_var, 0.0)) * 180.0 / M_PI;
+}
+
 // Two-view BA of the chosen hypothesis, a re-check of its points, and the scale fixed so that
 // the median depth in the first view is 1.
 TwoViewResult finish(TwoViewResult result, const Hypothesis& best, const Correspondences& a,
@@ -317,6 +366,15 @@ TwoViewResult finish(TwoViewResult result, const Hypothesis& best, const Corresp
     return refuse(result, "too few points survive the two-view bundle adjustment");
   }
   const double scale = 1.0 / common::upperMedian(depths);
+  result.rotation_sigma_deg = rotationSigmaDeg(T, points, good, focal, params.sigma_px);
+  if (!(result.rotation_sigma_deg <= params.max_rotation_sigma_ratio * best.median_parallax_deg)) {
+    char reason[160];
+    std::snprintf(reason, sizeof(reason),
+                  "rotation uncertain: std %.2f deg against a median parallax of %.2f deg "
+                  "(rotation and translation barely told apart: more baseline needed)",
+                  result.rotation_sigma_deg, best.median_parallax_deg);
+    return refuse(result, reason);
+  }
   result.T_second_first = geometry::SE3(T.rotation(), T.translation() * scale);
   result.points_first.assign(n, Eigen::Vector3d::Zero());
   result.triangulated = good;

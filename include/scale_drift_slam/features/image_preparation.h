@@ -39,6 +39,12 @@ int significantBits(const cv::Mat& mono16);
 /// Every level is an ROI inside a padded buffer, as cv::calcOpticalFlowPyrLK wants it.
 struct ImagePyramid {
   std::vector<cv::Mat> levels;
+  /// The same levels of the photometrically normalised image (normalisePhotometry), which the
+  /// optical flow follows points in when it is on; empty: the flow uses `levels`.
+  std::vector<cv::Mat> flow_levels;
+  const std::vector<cv::Mat>& flowLevels() const {
+    return flow_levels.empty() ? levels : flow_levels;
+  }
   const cv::Mat& base() const { return levels.front(); }
   int numLevels() const { return static_cast<int>(levels.size()); }
 };
@@ -46,7 +52,20 @@ struct ImagePyramid {
 /// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
 /// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
 /// or non-grey image.
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
+/// With `photometric_radius` > 0 it also builds `flow_levels`: normalisePhotometry of each
+/// level, padded alike.
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21,
+                          int photometric_radius = 0);
+
+/// Local photometric normalisation for the optical flow: each pixel's difference from the mean
+/// of the (2 radius + 1)^2 box around it over that box's mean absolute deviation (at least 6 grey
+/// levels, so that flat areas and their noise stay flat), mapped to 128 + 26 x. Lucas-Kanade
+/// assumes that a point keeps its grey level; vignetting (a smooth gain that changes as the point
+/// crosses the image), a changing exposure and light that varies over the scene break that, and
+/// the flow is then pulled along the patch's grey-level gradient: a bias of a fraction of a pixel
+/// per frame, the same for every point in one part of the image. A smooth gain and offset cancel
+/// here.
+cv::Mat normalisePhotometry(const cv::Mat& grey, int radius);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
 /// percentiles is below `target_range`, the grey values are scaled by

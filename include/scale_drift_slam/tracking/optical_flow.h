@@ -31,6 +31,9 @@ struct OpticalFlowParams {
   /// backward check (it doubles the cost).
   double max_forward_backward_px = 0.0;
   int dis_preset = 0;  ///< DIS: 0 ultrafast, 1 fast, 2 medium.
+  /// Lucas-Kanade follows points in the photometrically normalised image
+  /// (features::normalisePhotometry) with this box radius (pixels); 0: in the image itself.
+  int photometric_radius = 0;
   void validate() const;
 };
 

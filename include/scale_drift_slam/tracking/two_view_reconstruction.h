@@ -31,6 +31,10 @@ struct TwoViewParams {
   /// Among contenders, the winner must explain this many standard deviations (of a fair split)
   /// more of the points that tell them apart than each other contender does; else refuse.
   double ambiguity_sigmas = 3.0;
+  /// Refuse when the rotation's standard deviation (depths marginalised, sigma_px per point)
+  /// exceeds this share of the median parallax: rotation and translation across the view are
+  /// then barely told apart (a small baseline through a narrow lens), the wrong mix fits as well.
+  double max_rotation_sigma_ratio = 0.1;
   int bundle_adjustment_iterations = 20;
   void validate() const;
 };
@@ -43,6 +47,8 @@ struct TwoViewResult {
   double gric_homography = 0.0;     ///< GRIC of both models (lower is better).
   double gric_essential = 0.0;
   double median_parallax_deg = 0.0;
+  /// Standard deviation of the rotation (degrees, worst axis) with the depths marginalised.
+  double rotation_sigma_deg = 0.0;
   geometry::SE3 T_second_first;  ///< Maps first-camera points into the second camera.
   /// Per correspondence: its point in the first camera frame (valid where `triangulated`).
   std::vector<Eigen::Vector3d> points_first;
