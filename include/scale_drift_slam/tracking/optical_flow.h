@@ -59,9 +59,10 @@ class OpticalFlow {
                         const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
                         const std::vector<cv::Point2f>* start, std::vector<cv::Point2f>* to,
                         std::vector<unsigned char>* ok) const;
-  /// One Lucas-Kanade pass; `to` holds the start positions when `from_start` is set.
+  /// One Lucas-Kanade pass over pyramids as ImagePyramid::forFlow gives them (levels 0 to
+  /// `max_level`); `to` holds the start positions when `from_start` is set.
   void lucasKanadePass(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
-                       const std::vector<cv::Point2f>& from, bool from_start,
+                       int max_level, const std::vector<cv::Point2f>& from, bool from_start,
                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
   void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
