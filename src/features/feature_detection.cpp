@@ -185,4 +185,69 @@ void CornerGrid::query(const Eigen::Vector2d& center, double rx, double ry,
   }
 }
 
+SearchCorners::SearchCorners(const cv::Mat& grey, int threshold, int border)
+    : grey_(grey), threshold_(threshold) {
+  if (grey_.cols > 2 * border && grey_.rows > 2 * border) {
+    inner_ = cv::Rect(border, border, grey_.cols - 2 * border, grey_.rows - 2 * border);
+  }
+  cols_ = std::max(1, (grey_.cols + kCell - 1) / kCell);
+  rows_ = std::max(1, (grey_.rows + kCell - 1) / kCell);
+  tile_cols_ = (cols_ + kTileCellsX - 1) / kTileCellsX;
+  tile_rows_ = (rows_ + kTileCellsY - 1) / kTileCellsY;
+  cells_.resize(static_cast<std::size_t>(cols_) * rows_);
+  tile_done_.assign(static_cast<std::size_t>(tile_cols_) * tile_rows_, 0);
+}
+
+void SearchCorners::detectTile(int tx, int ty) {
+  unsigned char& done = tile_done_[static_cast<std::size_t>(ty) * tile_cols_ + tx];
+  if (done) return;
+  done = 1;
+  ++tiles_detected_;
+  const cv::Rect core(tx * kTileCellsX * kCell, ty * kTileCellsY * kCell, kTileCellsX * kCell,
+                      kTileCellsY * kCell);
+  // The margin: a corner's 16-pixel circle reaches 3 pixels out, and non-maximum suppression
+  // compares it with its 8 neighbours, whose own circles reach one pixel further.
+  constexpr int kMargin = 4;
+  const cv::Rect region = cv::Rect(core.x - kMargin, core.y - kMargin, core.width + 2 * kMargin,
+                                   core.height + 2 * kMargin) &
+                          inner_;
+  if (region.width < 7 || region.height < 7) return;
+  std::vector<cv::KeyPoint> found;
+  cv::FAST(grey_(region), found, threshold_, true);
+  for (cv::KeyPoint& corner : found) {
+    corner.pt.x += static_cast<float>(region.x);
+    corner.pt.y += static_cast<float>(region.y);
+    const int x = static_cast<int>(corner.pt.x), y = static_cast<int>(corner.pt.y);
+    if (!core.contains(cv::Point(x, y))) continue;
+    const int cx = std::min(x / kCell, cols_ - 1), cy = std::min(y / kCell, rows_ - 1);
+    cells_[static_cast<std::size_t>(cy) * cols_ + cx].push_back(static_cast<int>(corners_.size()));
+    corners_.push_back(corner);
+  }
+}
+
+void SearchCorners::query(const Eigen::Vector2d& center, double rx, double ry,
+                          std::vector<int>* indices) {
+  indices->clear();
+  if (!center.allFinite()) return;
+  const auto cell = [](double v, int n) {
+    return std::clamp(static_cast<int>(std::floor(v / kCell)), 0, n - 1);
+  };
+  const int x0 = cell(center.x() - rx, cols_), x1 = cell(center.x() + rx, cols_);
+  const int y0 = cell(center.y() - ry, rows_), y1 = cell(center.y() + ry, rows_);
+  for (int ty = y0 / kTileCellsY; ty <= y1 / kTileCellsY; ++ty) {
+    for (int tx = x0 / kTileCellsX; tx <= x1 / kTileCellsX; ++tx)
+      detectTile(tx, ty);
+  }
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      for (int i : cells_[static_cast<std::size_t>(y) * cols_ + x]) {
+        const cv::Point2f& p = corners_[i].pt;
+        if (std::abs(p.x - center.x()) <= rx && std::abs(p.y - center.y()) <= ry) {
+          indices->push_back(i);
+        }
+      }
+    }
+  }
+}
+
 }  // namespace scale_drift_slam::features
