@@ -150,8 +150,9 @@ double parabolaPeak(double a, double b, double c) {
 
 }  // namespace
 
-SearchCorners detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params) {
-  return SearchCorners(grey, params.fast_threshold, params.template_radius + 1);
+CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params) {
+  return CornerGrid(detectFast(grey, params.fast_threshold, params.template_radius + 1), grey.cols,
+                    grey.rows);
 }
 
 namespace {
@@ -216,9 +217,9 @@ std::vector<Prediction> spread(std::vector<Prediction> predictions,
 /// inside its gated region, then the sub-pixel parabola.
 void matchPoint(const SearchPoint& point, const Prediction& prediction,
                 const geometry::SE3& T_cur_world, const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
-                const geometry::CameraModel& camera, const cv::Mat& image, SearchCorners* corners,
-                const ActiveSearchParams& params, std::vector<float>* templ,
-                std::vector<int>* candidates, SearchMatch* match) {
+                const geometry::CameraModel& camera, const cv::Mat& image,
+                const CornerGrid& corners, const ActiveSearchParams& params,
+                std::vector<float>* templ, std::vector<int>* candidates, SearchMatch* match) {
   const int r = params.template_radius;
   match->searched = true;
   const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
@@ -241,12 +242,12 @@ void matchPoint(const SearchPoint& point, const Prediction& prediction,
   const double rx = std::min(std::sqrt(params.gate_chi2 * Sigma_z(0, 0)), params.max_radius_px);
   const double ry = std::min(std::sqrt(params.gate_chi2 * Sigma_z(1, 1)), params.max_radius_px);
   const Eigen::Vector2d& predicted = match->predicted_px;
-  corners->query(predicted, rx, ry, candidates);
+  corners.query(predicted, rx, ry, candidates);
   int best_x = static_cast<int>(std::lround(predicted.x()));
   int best_y = static_cast<int>(std::lround(predicted.y()));
   double best = scoreAt(image, best_x, best_y, r, *templ);
   for (int c : *candidates) {
-    const cv::Point2f pt = corners->corners()[c].pt;
+    const cv::Point2f& pt = corners.corners()[c].pt;
     const Eigen::Vector2d d = Eigen::Vector2d(pt.x, pt.y) - predicted;
     if (d.dot(information * d) > params.gate_chi2) continue;
     const int x = static_cast<int>(pt.x), y = static_cast<int>(pt.y);
@@ -274,7 +275,7 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const geometry::SE3& T_cur_world,
                                       const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
                                       const geometry::CameraModel& camera,
-                                      const ImagePyramid& image, SearchCorners* corners,
+                                      const ImagePyramid& image, const CornerGrid& corners,
                                       const ActiveSearchParams& params) {
   std::vector<SearchMatch> matches(points.size());
   std::vector<Prediction> predictions;

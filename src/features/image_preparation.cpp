@@ -119,22 +119,7 @@ cv::Mat toGrey(const cv::Mat& image, PixelEncoding encoding, int mono16_bits) {
   return grey;
 }
 
-std::vector<cv::Mat> ImagePyramid::forFlow(int num_levels) const {
-  const std::size_t n =
-      std::min<std::size_t>(levels.size(), static_cast<std::size_t>(std::max(num_levels, 1)));
-  if (derivatives.size() != levels.size()) {
-    return std::vector<cv::Mat>(levels.begin(), levels.begin() + n);
-  }
-  std::vector<cv::Mat> interleaved;
-  interleaved.reserve(2 * n);
-  for (std::size_t i = 0; i < n; ++i) {
-    interleaved.push_back(levels[i]);
-    interleaved.push_back(derivatives[i]);
-  }
-  return interleaved;
-}
-
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding, bool with_derivatives) {
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding) {
   if (grey.empty() || grey.type() != CV_8UC1) {
     throw std::invalid_argument("image pyramid needs a non-empty 8-bit grey image");
   }
@@ -148,19 +133,8 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding, bool
   ImagePyramid pyramid;
   // cv::buildOpticalFlowPyramid halves with cv::pyrDown and pads every level by `padding`
   // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
-  // With derivatives the levels come interleaved with them (image, derivative, image, ...); the
-  // derivatives are padded with zeros, as calcOpticalFlowPyrLK pads those it computes itself.
-  std::vector<cv::Mat> built;
-  cv::buildOpticalFlowPyramid(grey, built, cv::Size(padding, padding), max_level, with_derivatives,
+  cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
                               cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
-  if (!with_derivatives) {
-    pyramid.levels = std::move(built);
-    return pyramid;
-  }
-  for (std::size_t i = 0; i + 1 < built.size(); i += 2) {
-    pyramid.levels.push_back(built[i]);
-    pyramid.derivatives.push_back(built[i + 1]);
-  }
   return pyramid;
 }
 

@@ -128,11 +128,8 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
     return result;
   }
   rejected_in_row_ = 0;
-  // The derivatives serve Lucas-Kanade from this frame (initialiser, next frame's motion prior)
-  // and back to it (the candidates' backward check): computed once here instead of per call.
   const features::ImagePyramid pyramid =
-      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window,
-                             params_.motion_prior.flow.method == FlowMethod::kLucasKanade);
+      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window);
   result.times.prepare = stage.lapMs();
   try {
     if (state_ == TrackingState::kInitializing) {

@@ -18,9 +18,9 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
   const std::vector<features::SearchPoint> search_points = localSearchPoints(prior, &ids);
-  features::SearchCorners corners = features::detectSearchCorners(image.base(), params_.search);
+  const features::CornerGrid corners = features::detectSearchCorners(image.base(), params_.search);
   std::vector<features::SearchMatch> matches = features::activeSearch(
-      search_points, prior.T_cur_world, prior.Sigma, *camera_, image, &corners, params_.search);
+      search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners, params_.search);
   result->times.search = stage.lapMs();
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
   std::vector<Measurement> inliers;
@@ -30,7 +30,7 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   // image side the view is leaving, and its error on the other side, where the newest points
   // are, can exceed its gate (found 65 of 249 visible right after a keyframe promoted 192).
   if (result->num_inliers >= params_.min_inliers) {
-    researchMissed(T_cam_world, ids, search_points, image, &corners, &matches, &inliers,
+    researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
                    &T_cam_world, result);
   }
   recordSearches(ids, matches, result);
@@ -129,7 +129,8 @@ std::vector<features::SearchPoint> Tracker::localSearchPoints(const MotionPrior&
 
 void Tracker::researchMissed(const geometry::SE3& T_cam_world, const std::vector<map::PointId>& ids,
                              const std::vector<features::SearchPoint>& search_points,
-                             const features::ImagePyramid& image, features::SearchCorners* corners,
+                             const features::ImagePyramid& image,
+                             const features::CornerGrid& corners,
                              std::vector<features::SearchMatch>* matches,
                              std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                              FrameResult* result) {

@@ -1,7 +1,6 @@
 // FAST corners spread by the quadtree: the selection covers the image evenly (every quadrant of a
 // corner-rich image gets its share), respects the budget and the occupied pixels, and the corner
-// grid returns exactly the corners inside a box; the search corners, detected tile by tile, are
-// those of a detection over the whole frame.
+// grid returns exactly the corners inside a box.
 
 #include <random>
 
@@ -75,46 +74,6 @@ TEST(FeatureDetection, CornerGridQueriesTheBox) {
       EXPECT_LE(std::abs(corners[i].pt.x - center.x()), 25);
   }
   grid.query(Eigen::Vector2d(NAN, 3), 5, 5, &found);
-  EXPECT_TRUE(found.empty());
-}
-
-TEST(FeatureDetection, SearchCornersAreThoseOfAFullDetectionInTheSameOrder) {
-  // A textured frame of KITTI's odd size (not a multiple of the 16-pixel cells or the 64 x 32
-  // tiles) with noise, so that FAST at threshold 8 finds thousands of corners.
-  cv::Mat image = test::texturedImage(1241, 376, 8);
-  cv::Mat noise(image.size(), CV_8UC1);
-  cv::randu(noise, 0, 12);
-  image += noise;
-  const int threshold = 8, border = 5;
-  const std::vector<cv::KeyPoint> all = detectFast(image, threshold, border);
-  ASSERT_GT(all.size(), 2000u);
-  const CornerGrid full(all, image.cols, image.rows);
-  SearchCorners lazy(image, threshold, border);
-  std::mt19937 rng(9);
-  std::uniform_real_distribution<double> ux(-20, 1261), uy(-20, 396), radius(3, 40);
-  std::vector<int> expected, found;
-  for (int q = 0; q < 60; ++q) {
-    const Eigen::Vector2d center(ux(rng), uy(rng));
-    const double rx = radius(rng), ry = radius(rng);
-    full.query(center, rx, ry, &expected);
-    lazy.query(center, rx, ry, &found);
-    ASSERT_EQ(found.size(), expected.size()) << q;
-    for (std::size_t k = 0; k < found.size(); ++k) {
-      EXPECT_EQ(lazy.corners()[found[k]].pt, all[expected[k]].pt);
-      EXPECT_EQ(lazy.corners()[found[k]].response, all[expected[k]].response);
-    }
-  }
-  // Only the tiles the queries reached were detected; a query over everything finds them all.
-  EXPECT_LT(lazy.tilesDetected(), lazy.numTiles());
-  lazy.query(Eigen::Vector2d(620, 188), 700, 200, &found);
-  EXPECT_EQ(lazy.tilesDetected(), lazy.numTiles());
-  EXPECT_EQ(found.size(), all.size());
-  EXPECT_EQ(lazy.corners().size(), all.size());
-  lazy.query(Eigen::Vector2d(NAN, 3), 5, 5, &found);
-  EXPECT_TRUE(found.empty());
-  // Too small for any corner: no crash, nothing found.
-  SearchCorners tiny(cv::Mat(8, 8, CV_8UC1, cv::Scalar(3)), threshold, border);
-  tiny.query(Eigen::Vector2d(4, 4), 10, 10, &found);
   EXPECT_TRUE(found.empty());
 }
 

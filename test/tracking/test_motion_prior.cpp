@@ -13,7 +13,6 @@
 #include "scale_drift_slam/features/feature_detection.h"
 #include "scale_drift_slam/geometry/so3.h"
 #include "scale_drift_slam/tracking/motion_prior.h"
-#include "scale_drift_slam/tracking/optical_flow.h"
 #include "synthetic_images.h"
 
 namespace scale_drift_slam::tracking {
@@ -156,46 +155,6 @@ TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
       predicted.num_tracks, count(predicted_ok), predicted_ok.size(), plain.num_tracks,
       plain.from_flow ? "flow" : "fallback", count(plain_ok));
   EXPECT_LT(plain.num_tracks, predicted.num_tracks / 2);
-}
-
-TEST(OpticalFlow, PyramidsWithDerivativesGiveTheSameTracks) {
-  // The tracker builds each frame's Scharr derivatives once (ImagePyramid::derivatives) so that
-  // Lucas-Kanade does not recompute them in each of its calls: the tracks must not change. A
-  // textured 1241 x 376 image moved by (6.3, -2.7) px, with a predicted start for every point
-  // (half of them wrong by 12 px: the retry from the point), then the backward check.
-  const cv::Mat first = test::texturedImage(1241, 376, 21);
-  const cv::Point2f shift(6.3f, -2.7f);
-  cv::Mat second;
-  const cv::Mat move = (cv::Mat_<double>(2, 3) << 1, 0, shift.x, 0, 1, shift.y);
-  cv::warpAffine(first, second, move, first.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
-  std::vector<cv::Point2f> from, start;
-  for (const cv::KeyPoint& k : features::detectFast(first, 20, 30)) {
-    if (from.size() >= 300) break;
-    from.push_back(k.pt);
-    start.push_back(k.pt + shift + (from.size() % 2 ? cv::Point2f(12.f, 0.f) : cv::Point2f()));
-  }
-  ASSERT_GE(from.size(), 200u);
-  OpticalFlowParams params;
-  params.max_forward_backward_px = 1.0;  // the pass's own backward check too
-  const OpticalFlow flow(params);
-  std::vector<cv::Point2f> to[2];
-  std::vector<unsigned char> ok[2];
-  for (const bool derivatives : {false, true}) {
-    const features::ImagePyramid a = features::buildPyramid(first, 4, 15, derivatives);
-    const features::ImagePyramid b = features::buildPyramid(second, 4, 15, derivatives);
-    ASSERT_EQ(a.derivatives.size(), derivatives ? a.levels.size() : 0u);
-    OpticalFlow tracker(params);
-    tracker.track(a, b, from, &to[derivatives], &ok[derivatives], &start);
-    flow.checkBackward(a, b, from, to[derivatives], &ok[derivatives], 0.5);
-  }
-  int right = 0;
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    EXPECT_EQ(ok[0][i], ok[1][i]) << i;
-    EXPECT_EQ(to[0][i], to[1][i]) << i;
-    const cv::Point2f error = to[1][i] - (from[i] + shift);
-    right += ok[1][i] && std::hypot(error.x, error.y) < 0.1;
-  }
-  EXPECT_GT(right, static_cast<int>(0.9 * from.size()));
 }
 
 }  // namespace

@@ -71,18 +71,17 @@ Eigen::Matrix2d referenceWarp(const geometry::CameraModel& camera, const Eigen::
                               const Eigen::Vector3d& p_cur, const geometry::SE3& T_cur_ref);
 
 /// Searches every point; `corners` are the FAST corners of the current frame (see
-/// detectSearchCorners; detected where the search regions need them). Sigma_Delta is the 6x6
-/// covariance of the prior pose in the left-update tangent (omega, upsilon).
+/// detectSearchCorners). Sigma_Delta is the 6x6 covariance of the prior pose in the left-update
+/// tangent (omega, upsilon).
 std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const geometry::SE3& T_cur_world_prior,
                                       const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
                                       const geometry::CameraModel& camera,
-                                      const ImagePyramid& image, SearchCorners* corners,
+                                      const ImagePyramid& image, const CornerGrid& corners,
                                       const ActiveSearchParams& params);
 
-/// The FAST corners of a frame for active search, bucketed for region queries and detected
-/// where the queries reach (`grey` must outlive the result).
-SearchCorners detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params);
+/// The FAST corners of a frame for active search, bucketed for region queries.
+CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params);
 
 /// NCC of two equally sized float patches, in [-1, 1]; -1 when either has no texture.
 double normalizedCrossCorrelation(const float* a, const float* b, int n);

@@ -50,36 +50,4 @@ class CornerGrid {
   std::vector<std::vector<int>> cells_;
 };
 
-/// The FAST corners of a frame for region queries, detected tile by tile (64 x 32 pixels) when a
-/// query first reaches a tile: active search looks at a few hundred regions, which on the real
-/// sequences reach 27-75 % of the tiles (ViSP to KITTI), and FAST at threshold 8 over a whole
-/// textured frame is the largest single cost of a frame. A query gives the same corners, in the
-/// same order, as CornerGrid(detectFast(grey, threshold, border), width, height) (each tile is
-/// detected with a 4-pixel margin: FAST's 3-pixel circle and its non-maximum suppression see the
-/// same pixels). `grey` must stay alive and unchanged while the grid is queried.
-class SearchCorners {
- public:
-  SearchCorners(const cv::Mat& grey, int threshold, int border);
-  /// Indices (into corners()) of the corners within |x - cx| <= rx, |y - cy| <= ry; detects the
-  /// tiles the box reaches first. The indices stay valid; corners() may grow with each query.
-  void query(const Eigen::Vector2d& center, double rx, double ry, std::vector<int>* indices);
-  const std::vector<cv::KeyPoint>& corners() const { return corners_; }
-  /// Tiles detected so far, and of how many (for benchmarks and tests).
-  int tilesDetected() const { return tiles_detected_; }
-  int numTiles() const { return static_cast<int>(tile_done_.size()); }
-
- private:
-  static constexpr int kCell = 16;                        ///< Bucket cell (pixels), as CornerGrid.
-  static constexpr int kTileCellsX = 4, kTileCellsY = 2;  ///< Detection tile, in cells.
-  void detectTile(int tx, int ty);
-  cv::Mat grey_;
-  int threshold_;
-  cv::Rect inner_;  ///< Where corners may be: `border` pixels inside the image.
-  int cols_ = 1, rows_ = 1, tile_cols_ = 1, tile_rows_ = 1;
-  std::vector<cv::KeyPoint> corners_;
-  std::vector<std::vector<int>> cells_;
-  std::vector<unsigned char> tile_done_;
-  int tiles_detected_ = 0;
-};
-
 }  // namespace scale_drift_slam::features

@@ -37,24 +37,16 @@ int significantBits(const cv::Mat& mono16);
 /// A grey image and its pyramid: level 0 is the image itself, each further level halves it
 /// (cv::pyrDown, Gaussian 5x5). Levels stop early when the image gets smaller than 32 pixels.
 /// Every level is an ROI inside a padded buffer, as cv::calcOpticalFlowPyrLK wants it.
-/// `derivatives`, when built, holds each level's Scharr derivatives (CV_16SC2, padded the same
-/// way): Lucas-Kanade needs those of the image it tracks from and otherwise computes them over
-/// the whole pyramid in every call (three calls per frame: forward, retry, backward check).
 struct ImagePyramid {
   std::vector<cv::Mat> levels;
-  std::vector<cv::Mat> derivatives;  ///< Empty, or one per level.
   const cv::Mat& base() const { return levels.front(); }
   int numLevels() const { return static_cast<int>(levels.size()); }
-  /// The first `num_levels` levels (at most numLevels()) as cv::calcOpticalFlowPyrLK takes them:
-  /// interleaved with their derivatives when those were built (OpenCV then reuses them).
-  std::vector<cv::Mat> forFlow(int num_levels) const;
 };
 
 /// Builds the pyramid of a CV_8UC1 image with at most `num_levels` levels (>= 1), each padded by
-/// `padding` pixels (at least the optical-flow window), and with `with_derivatives` the levels'
-/// Scharr derivatives. Throws std::invalid_argument for an empty or non-grey image.
-ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21,
-                          bool with_derivatives = false);
+/// `padding` pixels (at least the optical-flow window). Throws std::invalid_argument for an empty
+/// or non-grey image.
+ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding = 21);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
 /// percentiles is below `target_range`, the grey values are scaled by

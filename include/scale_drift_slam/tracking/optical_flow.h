@@ -27,9 +27,8 @@ struct OpticalFlowParams {
   int pyramid_levels = 4;   ///< Levels used by Lucas-Kanade (1 = no pyramid).
   int max_iterations = 20;  ///< Lucas-Kanade iterations per level.
   /// Lucas-Kanade stops iterating at a level once its step is below this (pixels of that level).
-  /// 0.03 saves 12 % of the flow's time on renders without losing accuracy, but 10 iterations
-  /// and 0.03 px lost frames on real sequences (doc/benchmarks.md, "Tracking speed on real
-  /// images"): kept at 20 and 0.01.
+  /// 0.03 px saves 12 % of the flow's time on renders without losing accuracy, but it (and 10
+  /// iterations) lost frames on real sequences (doc/frontend.md): kept at OpenCV's usual 0.01.
   double min_step_px = 0.01;
   double max_error = 30.0;  ///< Lucas-Kanade: drop points whose mean patch error is larger.
   /// Drop points whose backward flow misses the start by more than this (pixels); <= 0 skips the
@@ -64,10 +63,9 @@ class OpticalFlow {
                         const features::ImagePyramid& current, const std::vector<cv::Point2f>& from,
                         const std::vector<cv::Point2f>* start, std::vector<cv::Point2f>* to,
                         std::vector<unsigned char>* ok) const;
-  /// One Lucas-Kanade pass over pyramids as ImagePyramid::forFlow gives them (levels 0 to
-  /// `max_level`); `to` holds the start positions when `from_start` is set.
+  /// One Lucas-Kanade pass; `to` holds the start positions when `from_start` is set.
   void lucasKanadePass(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
-                       int max_level, const std::vector<cv::Point2f>& from, bool from_start,
+                       const std::vector<cv::Point2f>& from, bool from_start,
                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
   void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,

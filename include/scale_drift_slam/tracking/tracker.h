@@ -159,7 +159,7 @@ class Tracker {
   /// matches and pose when they give more inliers.
   void researchMissed(const geometry::SE3& T_cam_world, const std::vector<map::PointId>& ids,
                       const std::vector<features::SearchPoint>& search_points,
-                      const features::ImagePyramid& image, features::SearchCorners* corners,
+                      const features::ImagePyramid& image, const features::CornerGrid& corners,
                       std::vector<features::SearchMatch>* matches,
                       std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                       FrameResult* result);
