@@ -75,6 +75,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"flow", "window", &t.motion_prior.flow.window},
       {"flow", "pyramid_levels", &t.motion_prior.flow.pyramid_levels},
       {"flow", "max_iterations", &t.motion_prior.flow.max_iterations},
+      {"flow", "min_step_px", &t.motion_prior.flow.min_step_px},
       {"flow", "max_error", &t.motion_prior.flow.max_error},
       {"flow", "max_forward_backward_px", &t.motion_prior.flow.max_forward_backward_px},
       {"flow", "dis_preset", &t.motion_prior.flow.dis_preset},

@@ -23,6 +23,9 @@ void OpticalFlowParams::validate() const {
     throw std::invalid_argument("flow.pyramid_levels must be in [1, 8]");
   }
   if (max_iterations < 1) throw std::invalid_argument("flow.max_iterations must be >= 1");
+  if (!(min_step_px > 0.0 && min_step_px < 1.0)) {
+    throw std::invalid_argument("flow.min_step_px must be in (0, 1)");
+  }
   if (!(max_error > 0.0)) throw std::invalid_argument("flow.max_error must be > 0");
   if (dis_preset < 0 || dis_preset > 2)
     throw std::invalid_argument("flow.dis_preset must be 0, 1 or 2");
@@ -105,7 +108,7 @@ void OpticalFlow::lucasKanadePass(const std::vector<cv::Mat>& previous,
   if (from.empty()) return;
   const int max_level = static_cast<int>(previous.size()) - 1;
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
-                                  params_.max_iterations, 0.01);
+                                  params_.max_iterations, params_.min_step_px);
   const cv::Size window(params_.window, params_.window);
   std::vector<float> error;
   cv::calcOpticalFlowPyrLK(previous, current, from, *to, *ok, error, window, max_level, criteria,
@@ -142,7 +145,7 @@ void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
   cv::calcOpticalFlowPyrLK(cur_levels, prev_levels, to, back, back_ok, error,
                            cv::Size(params_.window, params_.window), levels - 1,
                            cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
-                                            params_.max_iterations, 0.01),
+                                            params_.max_iterations, params_.min_step_px),
                            cv::OPTFLOW_USE_INITIAL_FLOW);
   for (std::size_t i = 0; i < from.size(); ++i) {
     const cv::Point2f d = back[i] - from[i];

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <opencv2/core.hpp>
 
@@ -51,6 +52,17 @@ int main(int argc, char** argv) {
     p.pyramid_levels = levels;
     variants.push_back(
         {"lucas_kanade w" + std::to_string(window) + " l" + std::to_string(levels), p});
+  }
+  // The default window and levels with coarser convergence criteria (the default: 20 iterations,
+  // 0.01 px steps), to see what the criterion costs and buys.
+  for (const auto& [iterations, step] :
+       {std::pair{10, 0.01}, std::pair{20, 0.03}, std::pair{10, 0.03}, std::pair{10, 0.05}}) {
+    tracking::OpticalFlowParams p;
+    p.max_iterations = iterations;
+    p.min_step_px = step;
+    char name[64];
+    std::snprintf(name, sizeof(name), "lucas_kanade w15 l4 it%d step%.2f", iterations, step);
+    variants.push_back({name, p});
   }
   for (int preset = 0; preset <= 2; ++preset) {
     tracking::OpticalFlowParams p;

@@ -32,6 +32,8 @@ TEST(SlamParamsIo, KeysOverrideDefaults) {
       "tracker:\n  good_inliers: 70\nflow:\n  method: dis\nwindow_ba:\n  window_size: 7\n"
       "motion_ba:\n  solver: ceres\nsystem:\n  mapping_thread: false\n");
   EXPECT_EQ(p.tracker.good_inliers, 70);
+  EXPECT_EQ(parseSlamParams("flow:\n  min_step_px: 0.03\n").tracker.motion_prior.flow.min_step_px,
+            0.03);
   EXPECT_EQ(p.tracker.motion_prior.flow.method, tracking::FlowMethod::kDis);
   EXPECT_EQ(p.mapper.window.window_size, 7);
   EXPECT_EQ(p.tracker.motion_ba.solver, features::MotionOnlySolver::kCeres);
@@ -84,6 +86,8 @@ TEST(SlamParamsIo, RefusesTyposAndBadValues) {
   expectFailure("tracker:\n  good_inliers: many\n", "tracker.good_inliers");
   expectFailure("tracker:\n  good_inliers: 5\n", "good_inliers");
   expectFailure("flow:\n  method: horn_schunck\n", "flow.method");
+  expectFailure("flow:\n  min_step_px: 0\n", "flow.min_step_px");
+  expectFailure("flow:\n  min_step_px: 1.5\n", "flow.min_step_px");
   expectFailure("search:\n  min_ncc: 2\n", "min_ncc");
   expectFailure("[1, 2]", "mapping of sections");
   expectFailure("tracker: [", "not valid YAML");
