@@ -100,7 +100,7 @@ foreach(variant shaped outage)
            WORKING_DIRECTORY ${SDS_TEST_OUTPUT_DIR})
   # RUN_SERIAL: each runs a whole SLAM stack in real time (30 Hz bag) plus the link emulator; two
   # of them at once on the 2-core CI machine starve the tracking node of CPU (the tracker then fell
-  # behind and was lost for ~85 frames in 2 of 7 runs), which is not what these tests are about.
+  # behind and was lost for ~85 frames in 2 of 8 runs), which is not what these tests are about.
   set_tests_properties(twohosts_${variant} PROPERTIES LABELS "rostest" SKIP_RETURN_CODE 77
     RUN_SERIAL TRUE ENVIRONMENT "SDS_TEST_OUTPUT_DIR=${SDS_TEST_OUTPUT_DIR}")
 endforeach()
