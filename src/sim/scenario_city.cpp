@@ -57,6 +57,18 @@ void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, s
                           std::to_string(static_cast<int>(route->duration())) + " s)";
 }
 
+/// Streets at x = 0 .. blocks_x pitch_x and y = 0 .. blocks_y pitch_y, with one row of blocks
+/// round them.
+CityGrid gridAround(int blocks_x, int blocks_y, double pitch_y) {
+  CityGrid grid;
+  grid.pitch_y = pitch_y;
+  grid.block_i0 = -1;
+  grid.block_i1 = blocks_x + 1;
+  grid.block_j0 = -1;
+  grid.block_j1 = blocks_y + 1;
+  return grid;
+}
+
 /// The city seen from `streets`, the drive along them and, when asked, the traffic.
 void buildCityAndDrive(Scenario& scenario, const CityGrid& grid,
                        const std::vector<Eigen::Vector2d>& streets, std::uint32_t seed,
@@ -72,11 +84,7 @@ Scenario makeCityBlock(std::uint32_t seed, const ScenarioOptions& options) {
   Scenario scenario;
   scenario.name = "city_block";
   scenario.description = "forward-looking car camera, one loop round a 110 m x 75 m city block";
-  CityGrid grid;
-  grid.block_i0 = -1;
-  grid.block_i1 = 2;
-  grid.block_j0 = -1;
-  grid.block_j1 = 2;
+  const CityGrid grid = gridAround(1, 1, 75.0);
   // Clockwise (right turns) round block (0, 0) from the middle of its west street, then on.
   const std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5), grid.node(0, 1),
                                                 grid.node(1, 1),   grid.node(1, 0),
@@ -91,12 +99,7 @@ Scenario makeCityLoop(std::uint32_t seed, const ScenarioOptions& options) {
   scenario.description =
       "forward-looking car camera, a loop round 3 x 2 city blocks and a second loop re-driving "
       "two of its streets";
-  CityGrid grid;
-  grid.pitch_y = 80.0;
-  grid.block_i0 = -1;
-  grid.block_i1 = 4;
-  grid.block_j0 = -1;
-  grid.block_j1 = 3;
+  const CityGrid grid = gridAround(3, 2, 80.0);
   // One lap: from the middle of the west street round both loops back to the south-west corner.
   // Each further lap drives on north from there through the start; the route ends past it.
   const std::vector<Eigen::Vector2d> lap = {grid.node(0, 2), grid.node(3, 2), grid.node(3, 0),
@@ -118,12 +121,7 @@ Scenario makeCityTour(std::uint32_t seed, const ScenarioOptions& options) {
   scenario.name = "city_tour";
   scenario.description =
       "forward-looking car camera, a tour of 8 x 5 city blocks (a serpentine) back to its start";
-  CityGrid grid;
-  grid.pitch_y = 80.0;
-  grid.block_i0 = -1;
-  grid.block_i1 = 9;
-  grid.block_j0 = -1;
-  grid.block_j1 = 6;
+  const CityGrid grid = gridAround(8, 5, 80.0);
   std::vector<Eigen::Vector2d> streets = {grid.node(0, 0.5), grid.node(0, 5), grid.node(8, 5)};
   for (int j = 4; j >= 1; --j) {  // down the serpentine: west on j = 4 and 2, east on 3 and 1
     const bool west = j % 2 == 0;
