@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/LU>
 
@@ -29,24 +30,48 @@ void ActiveSearchParams::validate() const {
 
 bool PointAppearance::cut(const ImagePyramid& image, const Eigen::Vector2d& px) {
   const int r = kPatchRadius;
-  // Both levels in one buffer, one above the other (each a continuous 21 x 21 view of it): a map
-  // point keeps one allocation instead of two (issue 18, memory per keyframe).
-  cv::Mat both(2 * (2 * r + 1), 2 * r + 1, CV_8UC1);
-  for (int level = 0; level < 2; ++level) {
+  has_patches_ = false;
+  for (int level = 0; level < kLevels; ++level) {
     const cv::Mat* source = level < image.numLevels() ? &image.levels[level] : nullptr;
     const double s = level == 0 ? 1.0 : 0.5;
     const int x0 = static_cast<int>(std::lround(px.x() * s)) - r;
     const int y0 = static_cast<int>(std::lround(px.y() * s)) - r;
-    if (!source || x0 < 0 || y0 < 0 || x0 + 2 * r + 1 > source->cols ||
-        y0 + 2 * r + 1 > source->rows) {
-      patch[0].release();  // empty(): no half-cut appearance
-      return false;
+    if (!source || x0 < 0 || y0 < 0 || x0 + kPatchSide > source->cols ||
+        y0 + kPatchSide > source->rows) {
+      return false;  // empty(): no half-cut appearance
     }
-    patch[level] = both.rowRange(level * (2 * r + 1), (level + 1) * (2 * r + 1));
-    (*source)(cv::Rect(x0, y0, 2 * r + 1, 2 * r + 1)).copyTo(patch[level]);
+    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels_.data() + level * kPatchSide * kPatchSide);
+    (*source)(cv::Rect(x0, y0, kPatchSide, kPatchSide)).copyTo(into);
   }
+  has_patches_ = true;
   px_reference = px;
   return true;
+}
+
+void PointAppearance::setPatches(const cv::Mat& level0, const cv::Mat& level1) {
+  if (level0.empty() && level1.empty()) {
+    has_patches_ = false;
+    return;
+  }
+  const cv::Mat* levels[kLevels] = {&level0, &level1};
+  for (int level = 0; level < kLevels; ++level) {
+    const cv::Mat& from = *levels[level];
+    if (from.type() != CV_8UC1 || from.rows != kPatchSide || from.cols != kPatchSide) {
+      throw std::invalid_argument("point appearance: the level-" + std::to_string(level) +
+                                  " patch is not a grey " + std::to_string(kPatchSide) + " x " +
+                                  std::to_string(kPatchSide) + " image");
+    }
+    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels_.data() + level * kPatchSide * kPatchSide);
+    from.copyTo(into);
+  }
+  has_patches_ = true;
+}
+
+cv::Mat PointAppearance::patch(int level) const {
+  if (!has_patches_ || level < 0 || level >= kLevels) return cv::Mat();
+  // A header over this object's pixels; the callers only read it.
+  return cv::Mat(kPatchSide, kPatchSide, CV_8UC1,
+                 const_cast<std::uint8_t*>(pixels_.data()) + level * kPatchSide * kPatchSide);
 }
 
 Eigen::Matrix2d referenceWarp(const geometry::CameraModel& camera, const Eigen::Vector3d& p_ref,
@@ -80,7 +105,7 @@ bool warpTemplate(const PointAppearance& appearance, const Eigen::Matrix2d& A_re
                   std::vector<float>* out) {
   const int level = std::abs(A_ref_cur.determinant()) > 3.0 ? 1 : 0;
   const double s = level == 0 ? 1.0 : 0.5;
-  const cv::Mat& patch = appearance.patch[level];
+  const cv::Mat patch = appearance.patch(level);
   const int R = PointAppearance::kPatchRadius;
   const Eigen::Vector2d origin(std::lround(appearance.px_reference.x() * s) - R,
                                std::lround(appearance.px_reference.y() * s) - R);

@@ -130,8 +130,18 @@ void load(Archive& ar, sds::loop::PoseGraphEdge& e) {
 }
 
 template <class Archive>
-void serialize(Archive& ar, sds::features::PointAppearance& a) {
-  ar(a.patch[0], a.patch[1], a.px_reference);
+void save(Archive& ar, const sds::features::PointAppearance& a) {
+  ar(a.patch(0), a.patch(1), a.px_reference);
+}
+template <class Archive>
+void load(Archive& ar, sds::features::PointAppearance& a) {
+  cv::Mat level0, level1;
+  ar(level0, level1, a.px_reference);
+  try {
+    a.setPatches(level0, level1);
+  } catch (const std::invalid_argument& e) {
+    throw Exception(e.what());
+  }
 }
 
 template <class Archive>

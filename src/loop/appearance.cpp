@@ -110,7 +110,8 @@ KeyframeAppearance AppearanceExtractor::extract(const cv::Mat& image,
   orb_->compute(grey, keypoints, appearance.descriptors);
   appearance.keypoints.reserve(keypoints.size());
   appearance.octaves.reserve(keypoints.size());
-  cv::Mat kept;
+  std::vector<int> kept;  // rows of the kept keypoints' descriptors
+  kept.reserve(keypoints.size());
   for (std::size_t i = 0; i < keypoints.size(); ++i) {
     cv::Point2f pt = keypoints[i].pt;
     if (camera != nullptr) {
@@ -123,9 +124,15 @@ KeyframeAppearance AppearanceExtractor::extract(const cv::Mat& image,
     }
     appearance.keypoints.push_back(pt);
     appearance.octaves.push_back(static_cast<std::uint8_t>(keypoints[i].octave));
-    kept.push_back(appearance.descriptors.row(static_cast<int>(i)));
+    kept.push_back(static_cast<int>(i));
   }
-  appearance.descriptors = kept;
+  // Copied into a matrix of exactly their size: cv::Mat::push_back row by row over-allocates
+  // by up to half, and the place-recognition database keeps every keyframe's descriptors.
+  cv::Mat descriptors(static_cast<int>(kept.size()), appearance.descriptors.cols,
+                      appearance.descriptors.type());
+  for (std::size_t row = 0; row < kept.size(); ++row)
+    appearance.descriptors.row(kept[row]).copyTo(descriptors.row(static_cast<int>(row)));
+  appearance.descriptors = descriptors;
   if (appearance.descriptors.empty()) {
     appearance.keypoints.clear();
     appearance.octaves.clear();

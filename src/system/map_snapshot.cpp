@@ -61,11 +61,6 @@ void MapSnapshot::validate() const {
   }
   for (const auto& [id, appearance] : point_appearances) {
     if (!map.hasPoint(id)) fail("an appearance of unknown point " + std::to_string(id));
-    for (const cv::Mat& patch : appearance.patch) {
-      if (!patch.empty() && patch.type() != CV_8UC1) {
-        fail("the appearance of point " + std::to_string(id) + " is not grey");
-      }
-    }
   }
   for (const loop::SavedPlace& place : places) {
     if (!map.hasKeyframe(place.id)) fail("a place of unknown keyframe " + std::to_string(place.id));

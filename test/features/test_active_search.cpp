@@ -78,6 +78,35 @@ Outcome search(const WallScene& s, const geometry::SE3& prior, double sigma) {
   return o;
 }
 
+TEST(PointAppearance, HoldsThePixelsAroundThePointAtBothLevels) {
+  const WallScene s = makeScene(geometry::SE3());
+  const Eigen::Vector2d px(200.0, 150.0);
+  PointAppearance appearance;
+  ASSERT_TRUE(appearance.cut(s.ref, px));
+  const int r = PointAppearance::kPatchRadius;
+  const cv::Mat level0 = s.ref.levels[0](cv::Rect(200 - r, 150 - r, 2 * r + 1, 2 * r + 1));
+  const cv::Mat level1 = s.ref.levels[1](cv::Rect(100 - r, 75 - r, 2 * r + 1, 2 * r + 1));
+  EXPECT_EQ(cv::norm(appearance.patch(0), level0, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(appearance.patch(1), level1, cv::NORM_INF), 0.0);
+  // A copy owns its pixels: cutting the original elsewhere leaves the copy as it was.
+  const PointAppearance copy = appearance;
+  ASSERT_TRUE(appearance.cut(s.ref, Eigen::Vector2d(400.0, 300.0)));
+  EXPECT_EQ(cv::norm(copy.patch(0), level0, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(appearance.patch(0), level0, cv::NORM_INF), 0.0);
+  // Too close to the border: nothing cut, and empty.
+  EXPECT_FALSE(appearance.cut(s.ref, Eigen::Vector2d(3.0, 3.0)));
+  EXPECT_TRUE(appearance.empty());
+  EXPECT_TRUE(appearance.patch(0).empty());
+  // Patches set from outside must be grey and of the patch size.
+  PointAppearance loaded;
+  loaded.setPatches(level0.clone(), level1.clone());
+  EXPECT_EQ(cv::norm(loaded.patch(1), level1, cv::NORM_INF), 0.0);
+  EXPECT_THROW(loaded.setPatches(level0, cv::Mat(5, 5, CV_8UC1)), std::invalid_argument);
+  EXPECT_THROW(loaded.setPatches(cv::Mat(21, 21, CV_8UC3), level1), std::invalid_argument);
+  loaded.setPatches(cv::Mat(), cv::Mat());
+  EXPECT_TRUE(loaded.empty());
+}
+
 TEST(ActiveSearch, FindsPointsInARotatedCloserView) {
   // 20 degrees about the optical axis, 0.6 m closer (scale change 1.25), a little sideways.
   const geometry::SE3 T_world_cur(geometry::expSO3(Eigen::Vector3d(0.02, -0.03, 0.35)),

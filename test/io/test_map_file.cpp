@@ -163,8 +163,8 @@ void expectSameFile(const MapFile& a, const MapFile& b) {
   for (const auto& [id, appearance] : s.point_appearances) {
     ASSERT_EQ(t.point_appearances.count(id), 1u);
     const features::PointAppearance& other = t.point_appearances.at(id);
-    EXPECT_TRUE(sameMat(appearance.patch[0], other.patch[0]));
-    EXPECT_TRUE(sameMat(appearance.patch[1], other.patch[1]));
+    EXPECT_TRUE(sameMat(appearance.patch(0), other.patch(0)));
+    EXPECT_TRUE(sameMat(appearance.patch(1), other.patch(1)));
     EXPECT_EQ(appearance.px_reference, other.px_reference);
   }
   EXPECT_EQ(s.vocabulary, t.vocabulary);

@@ -8,6 +8,7 @@
 // the NCC scores. Pure functions; called by the tracking thread.
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -35,14 +36,30 @@ struct ActiveSearchParams {
 };
 
 /// A point's appearance, cut from its reference keyframe at creation: square patches around its
-/// pixel at pyramid levels 0 and 1, and where they sit.
-struct PointAppearance {
-  static constexpr int kPatchRadius = 10;                  ///< Patches of 21 x 21 pixels.
-  std::array<cv::Mat, 2> patch;                            ///< CV_8UC1, levels 0 and 1.
+/// pixel at pyramid levels 0 and 1, and where they sit. The pixels live in the object itself (no
+/// allocation of their own): the tracker keeps one per map point, for the whole run (issue 18,
+/// memory per keyframe).
+class PointAppearance {
+ public:
+  static constexpr int kPatchRadius = 10;  ///< Patches of 21 x 21 pixels.
+  static constexpr int kPatchSide = 2 * kPatchRadius + 1;
+  static constexpr int kLevels = 2;
   Eigen::Vector2d px_reference = Eigen::Vector2d::Zero();  ///< Level-0 pixel in the reference.
-  /// Cuts the patches around `px` from `image`. Returns false when too close to the border.
+
+  /// Cuts the patches around `px` from `image`. Returns false (and is empty) when too close to
+  /// the border.
   bool cut(const ImagePyramid& image, const Eigen::Vector2d& px);
-  bool empty() const { return patch[0].empty(); }
+  /// Sets the patches (CV_8UC1, kPatchSide x kPatchSide each, or both empty: no appearance).
+  /// Throws std::invalid_argument on another type or size.
+  void setPatches(const cv::Mat& level0, const cv::Mat& level1);
+  /// The patch of `level` (0 or 1): a read-only view of this object's pixels (valid while it
+  /// lives), CV_8UC1, kPatchSide x kPatchSide; empty when nothing was cut.
+  cv::Mat patch(int level) const;
+  bool empty() const { return !has_patches_; }
+
+ private:
+  std::array<std::uint8_t, kLevels * kPatchSide * kPatchSide> pixels_{};
+  bool has_patches_ = false;
 };
 
 /// What active search needs of one map point.
