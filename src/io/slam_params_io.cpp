@@ -137,6 +137,8 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"window_ba", "function_tolerance", &p.mapper.window.function_tolerance},
       {"window_ba", "num_threads", &p.mapper.window.num_threads},
       {"mapper", "run_window_ba", &p.mapper.run_window_ba},
+      {"point_culling", "min_keyframes", &p.mapper.point_culling.min_keyframes},
+      {"point_culling", "after_keyframes", &p.mapper.point_culling.after_keyframes},
       {"loop_closure", "enabled", &l.enabled},
       {"loop_closure", "covisible_min_shared_points", &l.covisible_min_shared_points},
       {"loop_closure", "relocalisation_candidates", &l.relocalisation_candidates},

@@ -92,6 +92,7 @@ void LoopCorrectionParams::validate() const {
 
 void MapperParams::validate() const {
   window.validate();
+  point_culling.validate();
   loop_correction.validate();
 }
 
@@ -133,8 +134,25 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
     }
     removeRunawayPoints(map_, moved, update);
   }
+  cullWeakPoints(update);
   update.map_version = map_.version();
   return update;
+}
+
+void Mapper::cullWeakPoints(map::MapUpdate& update) {
+  const std::vector<map::PointId> weak = weakPoints(map_, params_.point_culling);
+  if (weak.empty()) return;
+  for (const map::PointId id : weak)
+    map_.removePoint(id);
+  // The window BA may have moved some of them just now: the update must not name them again.
+  auto culled = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
+    return std::binary_search(weak.begin(), weak.end(), entry.first);
+  };
+  update.point_positions.erase(
+      std::remove_if(update.point_positions.begin(), update.point_positions.end(), culled),
+      update.point_positions.end());
+  update.removed_points.insert(update.removed_points.end(), weak.begin(), weak.end());
+  culled_points_ += weak.size();
 }
 
 map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,

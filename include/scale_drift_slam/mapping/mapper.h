@@ -17,6 +17,7 @@
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/map/map.h"
 #include "scale_drift_slam/map/map_update.h"
+#include "scale_drift_slam/mapping/point_culling.h"
 #include "scale_drift_slam/mapping/structure_only_ba.h"
 #include "scale_drift_slam/mapping/window_bundle_adjustment.h"
 
@@ -47,6 +48,7 @@ struct LoopCorrectionParams {
 struct MapperParams {
   WindowBundleAdjustmentParams window;
   bool run_window_ba = true;  ///< Off: keyframes are only collected (for tests and debugging).
+  PointCullingParams point_culling;
   LoopCorrectionParams loop_correction;
   void validate() const;
 };
@@ -104,8 +106,12 @@ class Mapper {
 
   const map::Map& map() const { return map_; }
   const std::vector<loop::PoseGraphEdge>& loopEdges() const { return loop_edges_; }
+  /// Weak points culled so far (point_culling).
+  std::size_t culledPoints() const { return culled_points_; }
 
  private:
+  /// Removes the weak points (point_culling.h) from the map and lists them in the update.
+  void cullWeakPoints(map::MapUpdate& update);
   /// The loop edge of a constraint, weighted by loop_correction.loop_edge_weight.
   loop::PoseGraphEdge loopEdge(const loop::LoopConstraint& constraint) const;
   /// Builds the pose graph over all keyframes with these loop edges and solves it; throws
@@ -121,6 +127,7 @@ class Mapper {
   map::Map map_;
   std::vector<loop::PoseGraphEdge> loop_edges_;
   map::CorrectionHistory corrections_;
+  std::size_t culled_points_ = 0;
 };
 
 }  // namespace scale_drift_slam::mapping
