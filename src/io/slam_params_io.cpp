@@ -139,6 +139,8 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"mapper", "run_window_ba", &p.mapper.run_window_ba},
       {"point_culling", "min_keyframes", &p.mapper.point_culling.min_keyframes},
       {"point_culling", "after_keyframes", &p.mapper.point_culling.after_keyframes},
+      {"keyframe_culling", "redundant_ratio", &p.mapper.keyframe_culling.redundant_ratio},
+      {"keyframe_culling", "min_other_observers", &p.mapper.keyframe_culling.min_other_observers},
       {"loop_closure", "enabled", &l.enabled},
       {"loop_closure", "covisible_min_shared_points", &l.covisible_min_shared_points},
       {"loop_closure", "relocalisation_candidates", &l.relocalisation_candidates},

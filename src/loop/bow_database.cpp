@@ -15,6 +15,20 @@ std::size_t BowDatabase::add(const BowVector& bow) {
   return index;
 }
 
+void BowDatabase::forget(std::size_t index) {
+  if (index >= documents_.size()) return;
+  const auto document = static_cast<std::uint32_t>(index);
+  for (const WordId w : documents_[index].words) {
+    // Postings are in document order: the document's one is found by bisection.
+    std::vector<Posting>& postings = postings_[w];
+    const auto it = std::lower_bound(
+        postings.begin(), postings.end(), document,
+        [](const Posting& posting, std::uint32_t d) { return posting.document < d; });
+    if (it != postings.end() && it->document == document) postings.erase(it);
+  }
+  documents_[index] = BowVector{};
+}
+
 void BowDatabase::scoreAll(const BowVector& query, std::vector<float>& scores) const {
   scores.assign(documents_.size(), 0.0f);
   for (std::size_t i = 0; i < query.size(); ++i) {

@@ -189,7 +189,13 @@ LoopDetection LoopCloser::addKeyframe(map::KeyframeMessage message) {
 }
 
 void LoopCloser::applyMapUpdate(const map::MapUpdate& update) {
-  if (map::applyMapUpdate(update, map_, &map_version_)) corrections_.record(update);
+  if (!map::applyMapUpdate(update, map_, &map_version_)) return;
+  corrections_.record(update);
+  // A culled keyframe is redundant: never a loop or relocalisation candidate again.
+  for (const map::KeyframeId id : update.culled_keyframes) {
+    recognizer_.forget(id);
+    jpeg_images_.erase(id);
+  }
 }
 
 map::RelocalisationAnswer LoopCloser::relocalise(const map::RelocalisationRequest& request) {

@@ -100,6 +100,7 @@ std::vector<PlaceRecognizer::Place> PlaceRecognizer::places() const {
   places.reserve(keyframes_.size());
   for (std::size_t i = 0; i < keyframes_.size(); ++i) {
     const Stored& stored = keyframes_[i];
+    if (stored.forgotten) continue;
     const bool indexed = vocabulary_ && i < database_.size();
     places.push_back({stored.id, stored.timestamp, &stored.appearance,
                       indexed ? &database_.document(i) : nullptr,
@@ -152,6 +153,27 @@ PlaceQueryResult PlaceRecognizer::queryAndAdd(map::KeyframeId id, double timesta
   return result;
 }
 
+void PlaceRecognizer::forget(map::KeyframeId id) {
+  const auto it = index_of_.find(id);
+  if (it == index_of_.end()) return;
+  const std::size_t position = it->second;
+  index_of_.erase(it);
+  keyframes_[position].forgotten = true;
+  if (vocabulary_) release(position);
+}
+
+void PlaceRecognizer::release(std::size_t position) {
+  Stored& stored = keyframes_[position];
+  const KeyframeAppearance& old = stored.appearance;
+  KeyframeAppearance none;
+  none.image_width = old.image_width;
+  none.image_height = old.image_height;
+  none.undistorted = old.undistorted;
+  stored.appearance = std::move(none);
+  stored.groups = FeatureGroups{};
+  database_.forget(position);
+}
+
 void PlaceRecognizer::reportLoopRejected(map::KeyframeId query_id) {
   loops_.erase(
       std::remove_if(loops_.begin(), loops_.end(),
@@ -169,8 +191,10 @@ void PlaceRecognizer::trainOnlineVocabulary() {
   if (!any) return;  // nothing to learn from yet (textureless images): try at the next keyframe
   vocabulary_ =
       std::make_shared<const Vocabulary>(Vocabulary::train(descriptors, params_.vocabulary));
-  for (std::size_t i = 0; i < keyframes_.size(); ++i)
+  for (std::size_t i = 0; i < keyframes_.size(); ++i) {
     index(i);
+    if (keyframes_[i].forgotten) release(i);
+  }
 }
 
 void PlaceRecognizer::index(std::size_t position) {
@@ -251,6 +275,7 @@ std::vector<LoopCandidate> PlaceRecognizer::findPlaces(const KeyframeAppearance&
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t i = order[k];
     if (scores[i] < params_.min_normalized_score * best) break;
+    if (keyframes_[i].forgotten) continue;
     islands.push_back(Island{i, i, i, scores[i], scores[i]});
   }
   std::vector<LoopCandidate> candidates;
@@ -267,6 +292,7 @@ std::vector<PlaceRecognizer::Island> PlaceRecognizer::findIslands(
   std::vector<Island> islands;
   for (std::size_t i = 0; i < limit; ++i) {
     const Stored& stored = keyframes_[i];
+    if (stored.forgotten) continue;
     if (params_.recent_seconds_excluded > 0.0 &&
         stored.timestamp > timestamp - params_.recent_seconds_excluded) {
       continue;

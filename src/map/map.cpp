@@ -50,6 +50,24 @@ void Map::addObservation(KeyframeId keyframe_id, PointId point_id, const Eigen::
   ++version_;
 }
 
+std::vector<PointId> Map::clearObservations(KeyframeId id) {
+  std::vector<PointId> observed;
+  const auto it = keyframes_.find(id);
+  if (it == keyframes_.end()) return observed;
+  for (const Observation& observation : it->second.observations) {
+    std::vector<KeyframeId>& by = points_.at(observation.point_id).observed_by;
+    by.erase(std::remove(by.begin(), by.end(), id), by.end());
+    observed.push_back(observation.point_id);
+  }
+  num_observations_ -= it->second.observations.size();
+  it->second.observations.clear();
+  it->second.observations.shrink_to_fit();
+  std::sort(observed.begin(), observed.end());
+  observed.erase(std::unique(observed.begin(), observed.end()), observed.end());
+  ++version_;
+  return observed;
+}
+
 void Map::removePoint(PointId id) {
   const auto it = points_.find(id);
   if (it == points_.end()) return;

@@ -32,6 +32,8 @@ bool applyMapUpdate(const MapUpdate& update, Map& map, std::uint64_t* applied_ve
   moveKeyframesAndPoints(update, map.keyframes(), map.points());
   for (const PointId id : update.removed_points)
     map.removePoint(id);
+  for (const KeyframeId id : update.culled_keyframes)
+    map.clearObservations(id);
   map.bumpVersion();
   return true;
 }

@@ -5,6 +5,7 @@
 #include <map>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/loop/map_correction.h"
@@ -93,6 +94,7 @@ void LoopCorrectionParams::validate() const {
 void MapperParams::validate() const {
   window.validate();
   point_culling.validate();
+  keyframe_culling.validate();
   loop_correction.validate();
 }
 
@@ -135,24 +137,47 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
     removeRunawayPoints(map_, moved, update);
   }
   cullWeakPoints(update);
+  cullRedundantKeyframe(update);
   update.map_version = map_.version();
   return update;
 }
 
-void Mapper::cullWeakPoints(map::MapUpdate& update) {
-  const std::vector<map::PointId> weak = weakPoints(map_, params_.point_culling);
-  if (weak.empty()) return;
-  for (const map::PointId id : weak)
+void Mapper::removePoints(const std::vector<map::PointId>& sorted_ids, map::MapUpdate& update) {
+  if (sorted_ids.empty()) return;
+  for (const map::PointId id : sorted_ids)
     map_.removePoint(id);
   // The window BA may have moved some of them just now: the update must not name them again.
-  auto culled = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
-    return std::binary_search(weak.begin(), weak.end(), entry.first);
+  auto removed = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
+    return std::binary_search(sorted_ids.begin(), sorted_ids.end(), entry.first);
   };
   update.point_positions.erase(
-      std::remove_if(update.point_positions.begin(), update.point_positions.end(), culled),
+      std::remove_if(update.point_positions.begin(), update.point_positions.end(), removed),
       update.point_positions.end());
-  update.removed_points.insert(update.removed_points.end(), weak.begin(), weak.end());
+  update.removed_points.insert(update.removed_points.end(), sorted_ids.begin(), sorted_ids.end());
+}
+
+void Mapper::cullWeakPoints(map::MapUpdate& update) {
+  const std::vector<map::PointId> weak = weakPoints(map_, params_.point_culling);
+  removePoints(weak, update);
   culled_points_ += weak.size();
+}
+
+void Mapper::cullRedundantKeyframe(map::MapUpdate& update) {
+  std::unordered_set<map::KeyframeId> loop_ends;
+  for (const loop::PoseGraphEdge& edge : loop_edges_) {
+    loop_ends.insert(edge.from);
+    loop_ends.insert(edge.to);
+  }
+  const std::optional<map::KeyframeId> redundant =
+      redundantKeyframe(map_, params_.window.window_size, params_.keyframe_culling, loop_ends);
+  if (!redundant) return;
+  std::vector<map::PointId> orphans;
+  for (const map::PointId id : map_.clearObservations(*redundant)) {
+    if (map_.point(id).observed_by.size() < 2) orphans.push_back(id);
+  }
+  removePoints(orphans, update);  // sorted: clearObservations returns increasing ids
+  update.culled_keyframes.push_back(*redundant);
+  ++culled_keyframes_;
 }
 
 map::MapUpdate Mapper::closeLoop(const loop::LoopConstraint& constraint,

@@ -136,6 +136,7 @@ scale_drift_slam::MapUpdate toMapUpdateMsg(const map::MapUpdate& update) {
     msg.point_positions.push_back(point);
   }
   msg.removed_points = update.removed_points;
+  msg.culled_keyframes = update.culled_keyframes;
   for (const auto& [id, C] : update.keyframe_corrections) {
     msg.corrected_keyframe_ids.push_back(id);
     msg.keyframe_corrections.push_back(toSim3Msg(C));
@@ -178,6 +179,7 @@ map::MapUpdate fromMapUpdateMsg(const scale_drift_slam::MapUpdate& msg) {
     update.point_positions.emplace_back(msg.point_ids[i], position);
   }
   update.removed_points = msg.removed_points;
+  update.culled_keyframes = msg.culled_keyframes;
   for (std::size_t i = 0; i < msg.corrected_keyframe_ids.size(); ++i) {
     update.keyframe_corrections.emplace_back(msg.corrected_keyframe_ids[i],
                                              fromSim3Msg(msg.keyframe_corrections[i]));

@@ -148,6 +148,7 @@ std::string mapUpdateProblem(const map::MapUpdate& update, const MessageLimits& 
        {std::pair{update.keyframe_poses.size(), "keyframe poses"},
         std::pair{update.point_positions.size(), "point positions"},
         std::pair{update.removed_points.size(), "removed points"},
+        std::pair{update.culled_keyframes.size(), "culled keyframes"},
         std::pair{update.keyframe_corrections.size(), "keyframe corrections"},
         std::pair{update.loop_links.size(), "loop links"}}) {
     problem = sizeProblem(size, limits.max_update_entries, what);

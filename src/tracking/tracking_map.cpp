@@ -25,6 +25,57 @@ void TrackingMap::addObservation(map::KeyframeId keyframe, map::PointId point) {
   observers.push_back(keyframe);
 }
 
+void TrackingMap::removePoint(map::PointId id) {
+  points_.erase(id);
+  const auto observers = observers_.find(id);
+  if (observers == observers_.end()) return;
+  for (const map::KeyframeId keyframe : observers->second) {
+    const auto it = keyframes_.find(keyframe);
+    if (it == keyframes_.end()) continue;
+    std::vector<map::PointId>& points = it->second.points;
+    points.erase(std::remove(points.begin(), points.end(), id), points.end());
+  }
+  forgetObservers(observers->second);
+  observers_.erase(observers);
+}
+
+void TrackingMap::forgetObservers(const std::vector<map::KeyframeId>& observers) {
+  for (std::size_t i = 0; i < observers.size(); ++i) {
+    for (std::size_t j = i + 1; j < observers.size(); ++j) {
+      unshare(observers[i], observers[j]);
+      unshare(observers[j], observers[i]);
+    }
+  }
+}
+
+void TrackingMap::unshare(map::KeyframeId a, map::KeyframeId b) {
+  const auto from_a = shared_.find(a);
+  if (from_a == shared_.end()) return;
+  const auto count = from_a->second.find(b);
+  if (count == from_a->second.end()) return;
+  if (--count->second <= 0) from_a->second.erase(count);
+  if (from_a->second.empty()) shared_.erase(from_a);
+}
+
+void TrackingMap::cullKeyframe(map::KeyframeId id) {
+  const auto it = keyframes_.find(id);
+  if (it == keyframes_.end()) return;
+  for (const map::PointId point : it->second.points) {
+    const auto observers = observers_.find(point);
+    if (observers == observers_.end()) continue;
+    std::vector<map::KeyframeId>& by = observers->second;
+    const auto self = std::find(by.begin(), by.end(), id);
+    if (self == by.end()) continue;
+    by.erase(self);
+    for (const map::KeyframeId other : by) {
+      unshare(id, other);
+      unshare(other, id);
+    }
+  }
+  it->second.points.clear();
+  it->second.points.shrink_to_fit();
+}
+
 void TrackingMap::linkKeyframes(map::KeyframeId a, map::KeyframeId b) {
   std::vector<map::KeyframeId>& from_a = links_[a];
   if (std::find(from_a.begin(), from_a.end(), b) != from_a.end()) return;  // linked already
@@ -49,7 +100,9 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
   version_ = update.map_version;
   map::moveKeyframesAndPoints(update, keyframes_, points_);
   for (const map::PointId id : update.removed_points)
-    points_.erase(id);
+    removePoint(id);
+  for (const map::KeyframeId id : update.culled_keyframes)
+    cullKeyframe(id);
   for (const auto& [a, b] : update.loop_links) {
     if (keyframes_.count(a) && keyframes_.count(b)) linkKeyframes(a, b);
   }
@@ -103,7 +156,7 @@ std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera
   std::vector<std::pair<double, map::KeyframeId>> by_distance;
   for (const map::KeyframeId id : neighbourhood(region, 2, min_shared)) {
     const auto it = keyframes_.find(id);
-    if (it == keyframes_.end()) continue;
+    if (it == keyframes_.end() || it->second.points.empty()) continue;  // culled: no points
     by_distance.emplace_back(
         (it->second.T_kf_world.inverseTranslation() - camera_centre).squaredNorm(), id);
   }

@@ -217,6 +217,45 @@ TEST(PlaceRecognizer, RecentAndExcludedKeyframesAreNotProposed) {
   EXPECT_TRUE(by_time.empty() || *by_time.rbegin() <= 14);
 }
 
+TEST(PlaceRecognizer, AForgottenKeyframeIsNeverProposedAgain) {
+  const Walk& walk = revisitWalk();
+  for (const bool before_vocabulary : {false, true}) {
+    PlaceRecognitionParams params;
+    params.recent_keyframes_excluded = 2;
+    params.online_training_keyframes = 20;
+    PlaceRecognizer recognizer(params);
+    for (map::KeyframeId i = 0; i < 34; ++i) {
+      recognizer.add(i, 0.5 * i, walk.appearances[i]);
+      // Culled while the vocabulary is still learned from the first 20: it keeps its features
+      // until then (the learning needs them), and is left out all the same.
+      if (before_vocabulary && i == 12) {
+        for (map::KeyframeId k = 9; k <= 11; ++k)
+          recognizer.forget(k);
+      }
+    }
+    if (!before_vocabulary) {
+      for (map::KeyframeId k = 9; k <= 11; ++k)
+        recognizer.forget(k);
+    }
+    recognizer.forget(999);  // unknown: ignored
+    ASSERT_TRUE(recognizer.vocabularyReady());
+    EXPECT_FALSE(recognizer.contains(10));
+    EXPECT_THROW(recognizer.appearance(10), std::out_of_range);
+    EXPECT_EQ(recognizer.places().size(), 31u);
+    // Keyframe 10 seen again: its neighbours are proposed, never 9..11.
+    const PlaceQueryResult result = recognizer.query(1000, 17.0, walk.appearances[10]);
+    ASSERT_FALSE(result.candidates.empty());
+    for (const LoopCandidate& c : result.candidates)
+      EXPECT_TRUE(c.keyframe_id < 9 || c.keyframe_id > 11) << c.keyframe_id;
+    const std::vector<LoopCandidate> places =
+        recognizer.findPlaces(walk.appearances[10], 5, GeometricCheckParams{});
+    ASSERT_FALSE(places.empty());
+    for (const LoopCandidate& c : places)
+      EXPECT_TRUE(c.keyframe_id < 9 || c.keyframe_id > 11) << c.keyframe_id;
+    EXPECT_EQ(recognizer.appearance(12).size(), walk.appearances[12].size());
+  }
+}
+
 TEST(PlaceRecognizer, ARejectedLoopNoLongerSuppressesItsContinuation) {
   const Walk& walk = revisitWalk();
   PlaceRecognizer recognizer{PlaceRecognitionParams{}};

@@ -25,6 +25,27 @@ TEST(Map, LinksObservationsBothWays) {
   EXPECT_EQ(m.version(), version + 1);
 }
 
+TEST(Map, ClearingAKeyframesObservationsKeepsItsPose) {
+  Map map;
+  map.addPoint({1, Eigen::Vector3d(0, 0, 4), 0, {}});
+  map.addPoint({2, Eigen::Vector3d(1, 0, 4), 0, {}});
+  Keyframe a;
+  a.id = 0;
+  a.observations = {{1, Eigen::Vector2d::Zero()}, {2, Eigen::Vector2d::Zero()}};
+  map.addKeyframe(a);
+  Keyframe b;
+  b.id = 1;
+  b.T_kf_world = geometry::SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-1, 0, 0));
+  b.observations = {{2, Eigen::Vector2d::Zero()}};
+  map.addKeyframe(b);
+  EXPECT_EQ(map.clearObservations(1), (std::vector<PointId>{2}));
+  EXPECT_TRUE(map.keyframe(1).observations.empty());
+  EXPECT_EQ(map.keyframe(1).T_kf_world.translation(), Eigen::Vector3d(-1, 0, 0));
+  EXPECT_EQ(map.point(2).observed_by, (std::vector<KeyframeId>{0}));
+  EXPECT_EQ(map.numObservations(), 2u);
+  EXPECT_TRUE(map.clearObservations(7).empty());  // unknown: ignored
+}
+
 TEST(Map, RefusesBadIds) {
   Map m;
   m.addPoint({1, Eigen::Vector3d(0, 0, 1), 0, {}});

@@ -69,6 +69,8 @@ Errors correct(loop::PoseGraphMode mode, LoopCorrectionStatistics* stats) {
   const DriftedMap drifted = makeDriftedMap(120, 0.004);  // scale 0.62 at the end of the loop
   MapperParams params;
   params.run_window_ba = false;
+  params.point_culling.min_keyframes = 0;  // the correction, not the culling, is under test
+  params.keyframe_culling.redundant_ratio = 0.0;
   params.loop_correction.graph.mode = mode;
   Mapper mapper(params, 400.0);
   for (const map::KeyframeMessage& message : drifted.messages)
@@ -128,6 +130,8 @@ TEST(LoopCorrection, KeyframeMadeBeforeTheCorrectionIsBroughtIntoTheCorrectedFra
   DriftedMap drifted = makeDriftedMap(120, 0.004);
   MapperParams params;
   params.run_window_ba = false;
+  params.point_culling.min_keyframes = 0;  // the correction, not the culling, is under test
+  params.keyframe_culling.redundant_ratio = 0.0;
   Mapper mapper(params, 400.0);
   map::KeyframeMessage late = drifted.messages.back();
   drifted.messages.pop_back();
@@ -166,6 +170,8 @@ TEST(LoopCorrection, AConstraintThatBreaksTheGraphLeavesLaterLoopsIntact) {
   const DriftedMap drifted = makeDriftedMap(60, 0.004);
   MapperParams params;
   params.run_window_ba = false;
+  params.point_culling.min_keyframes = 0;  // the correction, not the culling, is under test
+  params.keyframe_culling.redundant_ratio = 0.0;
   Mapper mapper(params, 400.0);
   for (const map::KeyframeMessage& message : drifted.messages)
     mapper.addKeyframe(message);

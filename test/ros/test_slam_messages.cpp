@@ -100,6 +100,7 @@ TEST(SlamMessages, MapUpdateRoundTrip) {
   u.keyframe_poses = {{3, somePose(0.5)}, {4, somePose(-0.5)}};
   u.point_positions = {{7, {1.25, -2.5, 10.0}}, {8, {0.1, 0.2, 0.3}}};
   u.removed_points = {5, 6};
+  u.culled_keyframes = {2, 9};
   u.keyframe_corrections = {{3, geometry::Sim3::exp(0.5 * xi)}, {4, *u.S_new_old}};
   u.loop_links = {{4, 0}, {90, 12}};
   const map::MapUpdate back = fromMapUpdateMsg(toMapUpdateMsg(u));
@@ -116,6 +117,7 @@ TEST(SlamMessages, MapUpdateRoundTrip) {
   EXPECT_LT((back.point_positions[0].second - u.point_positions[0].second).norm(), 1e-6);
   EXPECT_LT((back.point_positions[1].second - u.point_positions[1].second).norm(), 1e-7);
   EXPECT_EQ(back.removed_points, u.removed_points);
+  EXPECT_EQ(back.culled_keyframes, u.culled_keyframes);
   ASSERT_EQ(back.keyframe_corrections.size(), 2u);
   EXPECT_EQ(back.keyframe_corrections[0].first, 3u);
   EXPECT_LT(

@@ -263,6 +263,7 @@ std::vector<std::function<void()>> updateMutations(map::MapUpdate& u, MessageFie
       },
       [&] { u.loop_links.emplace_back(f.hostileId(0), f.hostileId(1)); },
       [&] { u.removed_points.assign(f.hostileSize(), f.hostileId(3)); },
+      [&] { u.culled_keyframes.assign(f.hostileSize(), f.hostileId(2)); },
   };
 }
 

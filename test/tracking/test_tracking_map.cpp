@@ -71,6 +71,37 @@ TEST(TrackingMap, Sim3CorrectionKeepsProjections) {
             1e-12);
 }
 
+TEST(TrackingMap, ACulledKeyframeKeepsItsPoseButGivesNoPoints) {
+  TrackingMap map = smallMap();
+  map.linkPoint(1, 0);  // point 0: keyframes 0 and 1
+  map::MapUpdate update;
+  update.map_version = 1;
+  update.culled_keyframes = {0};
+  ASSERT_TRUE(map.apply(update));
+  ASSERT_TRUE(map.hasKeyframe(0));  // the pose stays (keyframe rule, patch references)
+  EXPECT_TRUE(map.keyframe(0).points.empty());
+  EXPECT_EQ(map.keyframeCentres().size(), 4u);
+  EXPECT_TRUE(map.hasPoint(1));  // its points stay, now reached through other keyframes only
+  // Nearest to x = 0.1 is keyframe 0, but it holds no points: keyframe 1 is taken instead.
+  std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {0}, 1, 1);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<map::PointId>{0, 2, 3, 6, 7}));
+  // Keyframe 0 no longer shares point 0 with keyframe 1.
+  EXPECT_EQ(map.neighbourhood({1}, 1, 1).count(0), 0u);
+}
+
+TEST(TrackingMap, RemovedPointsLeaveTheKeyframesAndTheirSharing) {
+  TrackingMap map = smallMap();
+  map.linkPoint(1, 0);
+  EXPECT_EQ(map.neighbourhood({1}, 1, 1).count(0), 1u);
+  map::MapUpdate update;
+  update.map_version = 1;
+  update.removed_points = {0};
+  ASSERT_TRUE(map.apply(update));
+  EXPECT_EQ(map.keyframe(0).points, (std::vector<map::PointId>{1}));
+  EXPECT_EQ(map.neighbourhood({1}, 1, 1).count(0), 0u);
+}
+
 TEST(TrackingMap, LocalPointsFromNewestAndNearestKeyframes) {
   TrackingMap map = smallMap();
   map.linkPoint(3, 0);  // point 0 is also seen by keyframe 3: it must come once

@@ -15,6 +15,8 @@ class BowDatabase {
  public:
   /// Adds a bag of words; returns its document number.
   std::size_t add(const BowVector& bow);
+  /// Takes a document out of the index (its postings and bag go; its number stays, scoring 0).
+  void forget(std::size_t index);
   std::size_t size() const { return documents_.size(); }
   const BowVector& document(std::size_t index) const { return documents_.at(index); }
 

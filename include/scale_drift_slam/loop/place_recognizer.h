@@ -108,6 +108,11 @@ class PlaceRecognizer {
   std::vector<LoopCandidate> findPlaces(const KeyframeAppearance& appearance, int max_candidates,
                                         const GeometricCheckParams& geometry) const;
 
+  /// Forgets a keyframe (culled by the mapper as redundant): it is never proposed again, and its
+  /// features and bag of words are freed (before the vocabulary is learned, once it is: the
+  /// learning needs them). An unknown id is ignored.
+  void forget(map::KeyframeId id);
+
   /// Tells that the loop accepted at `query_id` failed metric verification: it no longer
   /// suppresses later candidates as its continuation.
   void reportLoopRejected(map::KeyframeId query_id);
@@ -115,6 +120,7 @@ class PlaceRecognizer {
   bool vocabularyReady() const { return vocabulary_ != nullptr; }
   std::shared_ptr<const Vocabulary> vocabulary() const { return vocabulary_; }
   std::size_t size() const { return keyframes_.size(); }
+  /// Added and not forgotten.
   bool contains(map::KeyframeId id) const { return index_of_.count(id) != 0; }
   /// The stored appearance of a keyframe (loop verification matches against it). Throws
   /// std::out_of_range for an unknown id.
@@ -129,7 +135,7 @@ class PlaceRecognizer {
     const BowVector* bow = nullptr;                  ///< Null before the keyframe was indexed.
     const FeatureGroups* groups = nullptr;
   };
-  /// The keyframes added so far, in the order they were added.
+  /// The keyframes added so far and not forgotten, in the order they were added.
   std::vector<Place> places() const;
 
  private:
@@ -138,6 +144,7 @@ class PlaceRecognizer {
     double timestamp = 0.0;
     KeyframeAppearance appearance;
     FeatureGroups groups;
+    bool forgotten = false;
   };
   struct Island {
     std::size_t first = 0;
@@ -159,6 +166,8 @@ class PlaceRecognizer {
   };
 
   void trainOnlineVocabulary();
+  /// Frees a forgotten keyframe's features and bag (once the vocabulary is learned).
+  void release(std::size_t position);
   void index(std::size_t position);
   std::vector<Island> findIslands(const std::vector<float>& scores, double reference,
                                   std::size_t limit, double timestamp,

@@ -59,7 +59,11 @@ struct MapUpdate {
   std::optional<geometry::Sim3> S_new_old;
   std::vector<std::pair<KeyframeId, geometry::SE3>> keyframe_poses;  ///< T_kf_world.
   std::vector<std::pair<PointId, Eigen::Vector3d>> point_positions;  ///< p_world.
-  std::vector<PointId> removed_points;  ///< Dropped by the mapper (outliers).
+  std::vector<PointId> removed_points;  ///< Dropped by the mapper (outliers, weak points).
+  /// Keyframes the mapper culled as redundant (mapping/keyframe_culling.h): they lose their
+  /// observations (and the loop closer their image and place), keep their poses. Applied after
+  /// removed_points.
+  std::vector<KeyframeId> culled_keyframes;
   /// Loop closure only: for each corrected keyframe k, the similarity C_k mapping old world
   /// coordinates near k into corrected ones (p_new = C_k p_old). Anything anchored to k (a frame
   /// of the trajectory, a point) moves with it; S_new_old is C of the newest keyframe.

@@ -52,6 +52,10 @@ class Map {
   void addObservation(KeyframeId keyframe_id, PointId point_id, const Eigen::Vector2d& xy);
   /// Removes a point and its observations; an unknown id is ignored.
   void removePoint(PointId id);
+  /// Removes every observation a keyframe holds (a culled keyframe: its pose stays, the anchor
+  /// of its points and frames). Returns the points it observed, in increasing id order. An
+  /// unknown id is ignored.
+  std::vector<PointId> clearObservations(KeyframeId id);
 
   bool hasKeyframe(KeyframeId id) const { return keyframes_.count(id) != 0; }
   bool hasPoint(PointId id) const { return points_.count(id) != 0; }

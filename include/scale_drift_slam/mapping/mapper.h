@@ -17,6 +17,7 @@
 #include "scale_drift_slam/map/keyframe_message.h"
 #include "scale_drift_slam/map/map.h"
 #include "scale_drift_slam/map/map_update.h"
+#include "scale_drift_slam/mapping/keyframe_culling.h"
 #include "scale_drift_slam/mapping/point_culling.h"
 #include "scale_drift_slam/mapping/structure_only_ba.h"
 #include "scale_drift_slam/mapping/window_bundle_adjustment.h"
@@ -49,6 +50,7 @@ struct MapperParams {
   WindowBundleAdjustmentParams window;
   bool run_window_ba = true;  ///< Off: keyframes are only collected (for tests and debugging).
   PointCullingParams point_culling;
+  KeyframeCullingParams keyframe_culling;
   LoopCorrectionParams loop_correction;
   void validate() const;
 };
@@ -108,10 +110,17 @@ class Mapper {
   const std::vector<loop::PoseGraphEdge>& loopEdges() const { return loop_edges_; }
   /// Weak points culled so far (point_culling).
   std::size_t culledPoints() const { return culled_points_; }
+  /// Redundant keyframes culled so far (keyframe_culling).
+  std::size_t culledKeyframes() const { return culled_keyframes_; }
 
  private:
   /// Removes the weak points (point_culling.h) from the map and lists them in the update.
   void cullWeakPoints(map::MapUpdate& update);
+  /// Culls the redundant keyframe (keyframe_culling.h), if any, and the points it leaves seen by
+  /// fewer than two keyframes, and lists them in the update.
+  void cullRedundantKeyframe(map::MapUpdate& update);
+  /// Removes the points from the map and the update's positions and lists them as removed.
+  void removePoints(const std::vector<map::PointId>& sorted_ids, map::MapUpdate& update);
   /// The loop edge of a constraint, weighted by loop_correction.loop_edge_weight.
   loop::PoseGraphEdge loopEdge(const loop::LoopConstraint& constraint) const;
   /// Builds the pose graph over all keyframes with these loop edges and solves it; throws
@@ -128,6 +137,7 @@ class Mapper {
   std::vector<loop::PoseGraphEdge> loop_edges_;
   map::CorrectionHistory corrections_;
   std::size_t culled_points_ = 0;
+  std::size_t culled_keyframes_ = 0;
 };
 
 }  // namespace scale_drift_slam::mapping

@@ -47,8 +47,9 @@ class TrackingMap {
   void linkKeyframes(map::KeyframeId a, map::KeyframeId b);
 
   /// Applies a mapper correction: the optional similarity first, then poses and positions of
-  /// known ids, then removals. Updates older than the last applied version are ignored.
-  /// Returns false when ignored.
+  /// known ids, then removals (points; the observations of culled keyframes, whose poses stay
+  /// for the keyframe rule and the points' patches). Updates older than the last applied
+  /// version are ignored. Returns false when ignored.
   bool apply(const map::MapUpdate& update);
 
   /// The local map (ids, each once): the points of the `num_recent` newest keyframes and of the
@@ -89,6 +90,11 @@ class TrackingMap {
   /// The graph of the local map: keyframes observing each point, shared points per keyframe
   /// pair, loop links.
   void addObservation(map::KeyframeId keyframe, map::PointId point);
+  void removePoint(map::PointId id);
+  void cullKeyframe(map::KeyframeId id);
+  /// Takes the shared points of every pair of `observers` down by one.
+  void forgetObservers(const std::vector<map::KeyframeId>& observers);
+  void unshare(map::KeyframeId a, map::KeyframeId b);  ///< One point fewer shared (a -> b).
   std::unordered_map<map::PointId, std::vector<map::KeyframeId>> observers_;
   std::unordered_map<map::KeyframeId, std::unordered_map<map::KeyframeId, int>> shared_;
   std::unordered_map<map::KeyframeId, std::vector<map::KeyframeId>> links_;
