@@ -430,6 +430,14 @@ std::string nothingTrackedReason(const RunTally& tally) {
          "); check the calibration and that the camera moves sideways at the start";
 }
 
+/// Keyframes culled as redundant (mapping/keyframe_culling.h): they hold no observations.
+std::size_t culledKeyframes(const map::Map& map) {
+  std::size_t culled = 0;
+  for (const auto& [id, keyframe] : map.keyframes())
+    culled += keyframe.observations.empty();
+  return culled;
+}
+
 void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
                       const RunTally& tally, const OutputReport& outputs,
                       const std::vector<std::string>& dataset_warnings, double startup_ms,
@@ -448,6 +456,7 @@ void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
       {"nothing_tracked", nothingTrackedReason(tally)},
       {"states", tally.states},
       {"keyframes", slam.map().numKeyframes()},
+      {"keyframes_culled", culledKeyframes(slam.map())},
       {"points", slam.map().numPoints()},
       {"observations", slam.map().numObservations()},
       {"loops", loopsJson(slam)},
@@ -475,8 +484,9 @@ void printSummary(const RunOptions& options, const system::SlamSystem& slam, con
     std::cout << (k ? ", " : " (their poses: ") << "trajectory[_as_tracked]_map" << k
               << "_discarded.txt" << (k + 1 == slam.mapRestarts() ? ")" : "");
   }
-  std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes, " << slam.map().numPoints()
-            << " points, " << slam.map().numObservations() << " observations\n"
+  std::cout << "\nmap: " << slam.map().numKeyframes() << " keyframes ("
+            << culledKeyframes(slam.map()) << " culled), " << slam.map().numPoints() << " points, "
+            << slam.map().numObservations() << " observations\n"
             << tally.timings.table() << "start-up " << startup_ms << " ms, peak memory " << peak_mib
             << " MiB\noutputs in " << options.out.string() << "\n";
 }

@@ -1,5 +1,5 @@
 // Keyframe culling on hand-made maps whose answer is known: the keyframe that just left the
-// window is culled when at least 90 % of its points are seen by 3 other keyframes, never the
+// window is culled when at least 90 % of its points are seen by 2 other keyframes, never the
 // oldest or a loop edge's end; the Mapper clears its observations (its pose stays), drops the
 // points it leaves unobserved and names both in its update.
 
@@ -59,7 +59,7 @@ TEST(KeyframeCulling, TheMapperClearsTheCulledKeyframeAndItsOrphanPoints) {
   params.window.window_size = 10;
   Mapper mapper(params, 500.0);
   // Every keyframe k sees the shared points 0..9 and its own point 100 + k: 10 of its 11 points
-  // are seen by 3 other keyframes once there are 4.
+  // are seen by 2 other keyframes once there are 3.
   std::vector<map::KeyframeId> culled;
   std::vector<map::PointId> removed;
   for (map::KeyframeId k = 0; k < 15; ++k) {
