@@ -22,9 +22,11 @@ std::vector<map::PointId> weakPoints(const map::Map& map, const PointCullingPara
   }
   const auto& keyframes = map.keyframes();
   const map::Keyframe& aged = std::prev(keyframes.end(), params.after_keyframes + 1)->second;
+  const geometry::SE3& T_newest_world = keyframes.rbegin()->second.T_kf_world;
   for (const map::Observation& observation : aged.observations) {
     const map::MapPoint& point = map.point(observation.point_id);
     if (static_cast<int>(point.observed_by.size()) >= params.min_keyframes) continue;
+    if ((T_newest_world * point.p_world).z() > 0.0) continue;  // still ahead: may be found again
     const map::KeyframeId newest =
         *std::max_element(point.observed_by.begin(), point.observed_by.end());
     if (newest == aged.id) weak.push_back(point.id);
