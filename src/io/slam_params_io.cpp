@@ -166,6 +166,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"loop_correction", "loop_edge_weight", &c.loop_edge_weight},
       {"loop_correction", "structure_iterations", &c.structure.max_iterations},
       {"loop_correction", "structure_huber_width_px", &c.structure.huber_width_px},
+      {"loop_correction", "structure_min_shift_px", &c.structure_min_shift_px},
       {"system", "mapping_thread", &p.mapping_thread},
       {"messages", "max_observations", &p.messages.max_observations},
       {"messages", "max_new_points", &p.messages.max_new_points},

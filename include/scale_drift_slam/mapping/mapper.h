@@ -40,6 +40,11 @@ struct LoopCorrectionParams {
   /// Weight of a loop edge's information relative to an odometry edge's (identity).
   double loop_edge_weight = 1.0;
   StructureOnlyBAOptions structure;
+  /// The structure-only BA refines only the points whose image in one of their observers the
+  /// correction moved by more than this many pixels (loop::pointsDisturbedByCorrection: where the
+  /// correction is not smooth); the others move with their reference keyframe and keep their
+  /// reprojection errors to within this. 0: every point of the map (the earlier behaviour).
+  double structure_min_shift_px = 0.1;
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -70,10 +75,14 @@ struct LoopCorrectionStatistics {
   /// loop measured (after an earlier correction, the trajectory as tracked is not that map).
   std::vector<std::pair<double, geometry::SE3>> keyframes_before;
   /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
+  /// structure_ms includes choosing the points to refine (loop::pointsDisturbedByCorrection).
   double build_ms = 0.0, graph_ms = 0.0, correction_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  /// Points the structure-only BA refined, of all points of the map.
+  std::size_t structure_points = 0, map_points = 0;
   /// The whole correction's CPU time on the mapping thread (unaffected by other processes).
   double total_cpu_ms = 0.0;
-  /// Reprojection errors after the correction, before and after the structure-only BA.
+  /// Reprojection errors of the refined points after the correction, before and after the
+  /// structure-only BA.
   ReprojectionStats reprojection_before, reprojection_after;
   loop::PoseGraphMode mode = loop::PoseGraphMode::kSim3;
   /// One line for logs: the loop, the graph and the time of each step, or why it was refused.
@@ -115,6 +124,11 @@ class Mapper {
   /// Moves keyframes and points with the solved graph, refines the points (structure-only BA)
   /// and returns the update for the tracker.
   map::MapUpdate correctMap(const loop::PoseGraphResult& solved, LoopCorrectionStatistics* stats);
+  /// The structure-only BA after the correction, over the points it disturbed (or all, see
+  /// LoopCorrectionParams::structure_min_shift_px).
+  void refineDisturbedStructure(
+      const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
+      LoopCorrectionStatistics* stats);
 
   MapperParams params_;
   double focal_length_px_;
