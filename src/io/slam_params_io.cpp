@@ -161,6 +161,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"loop_correction", "max_iterations", &c.graph.max_iterations},
       {"loop_correction", "function_tolerance", &c.graph.function_tolerance},
       {"loop_correction", "loop_error_passes", &c.graph.loop_error_passes},
+      {"loop_correction", "initial_damping", &c.graph.initial_damping},
       {"loop_correction", "covisibility_min_shared_points", &c.covisibility_min_shared_points},
       {"loop_correction", "covisibility_max_edges", &c.covisibility_max_edges},
       {"loop_correction", "loop_edge_weight", &c.loop_edge_weight},

@@ -211,20 +211,25 @@ loop::PoseGraphResult Mapper::solveLoopGraph(const std::vector<loop::PoseGraphEd
   return solved;
 }
 
-void Mapper::refineDisturbedStructure(
+std::vector<map::PointId> Mapper::refineDisturbedStructure(
     const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
     LoopCorrectionStatistics* stats) {
   const common::Stopwatch timer;
   const LoopCorrectionParams& p = params_.loop_correction;
   stats->map_points = map_.numPoints();
-  std::vector<map::PointId> points;  // empty: every point
+  std::vector<map::PointId> points;
   if (p.structure_min_shift_px > 0.0) {
     points = loop::pointsDisturbedByCorrection(map_, corrections, focal_length_px_,
                                                p.structure_min_shift_px);
+    stats->structure_selection_ms = timer.ms();
     if (points.empty()) {
       stats->structure_ms = timer.ms();
-      return;
+      return points;
     }
+  } else {
+    points.reserve(map_.numPoints());
+    for (const auto& entry : map_.points())
+      points.push_back(entry.first);
   }
   const StructureOnlyBAResult structure =
       refineStructure(map_, points, {focal_length_px_, focal_length_px_}, p.structure);
@@ -232,6 +237,7 @@ void Mapper::refineDisturbedStructure(
   stats->reprojection_before = structure.before;  // after the correction, before the refinement
   stats->reprojection_after = structure.after;
   stats->structure_ms = timer.ms();
+  return points;
 }
 
 map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
@@ -246,17 +252,16 @@ map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
   const common::Stopwatch correction_timer;
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
   stats->correction_ms = correction_timer.ms();
-  refineDisturbedStructure(update.keyframe_corrections, stats);
+  const std::vector<map::PointId> refined =
+      refineDisturbedStructure(update.keyframe_corrections, stats);
 
   for (const auto& [id, keyframe] : map_.keyframes())
     update.keyframe_poses.emplace_back(id, keyframe.T_kf_world);
-  std::vector<map::PointId> ids;
-  ids.reserve(map_.numPoints());
-  for (const auto& [id, point] : map_.points()) {
+  update.point_positions.reserve(map_.numPoints());
+  for (const auto& [id, point] : map_.points())
     update.point_positions.emplace_back(id, point.p_world);
-    ids.push_back(id);
-  }
-  removeRunawayPoints(map_, ids, update);
+  // The others moved with their reference keyframe: their depth there is as it was.
+  removeRunawayPoints(map_, refined, update);
   map_.bumpVersion();
   update.map_version = map_.version();
   return update;

@@ -83,7 +83,8 @@ void replay(Report& report, const std::string& name, const sds::io::MapFile& fil
              std::to_string(s.graph_iterations) + " iterations");
   report.add(name + ": map correction", s.correction_ms, "ms");
   report.add(name + ": structure-only BA", s.structure_ms, "ms",
-             std::to_string(s.structure_points) + " points refined");
+             std::to_string(s.structure_points) + " points refined, chosen in " +
+                 std::to_string(s.structure_selection_ms) + " ms");
   const sds::mapping::ReprojectionStats all =
       sds::mapping::reprojectionStats(corrected, {focal, focal});
   report.add(name + ": reprojection median, whole map", all.median, "px");
@@ -185,6 +186,13 @@ int main(int argc, char** argv) {
       std::snprintf(name, sizeof(name), "tolerance %g", tolerance);
       solveGraph(report, name, file, constraint, options, &reference);
     }
+    for (const double damping : {1e-8, 1e-10, 1e-12}) {
+      sds::loop::PoseGraphOptions options = sds::mapping::LoopCorrectionParams().graph;
+      options.initial_damping = damping;
+      char name[64];
+      std::snprintf(name, sizeof(name), "initial damping %g", damping);
+      solveGraph(report, name, file, constraint, options, &reference);
+    }
     {
       sds::loop::PoseGraphOptions options = sds::mapping::LoopCorrectionParams().graph;
       options.linear_solver = sds::loop::PoseGraphLinearSolver::kEigenSparseCholesky;
@@ -210,7 +218,21 @@ int main(int argc, char** argv) {
   sds::mapping::MapperParams everything = defaults;
   everything.loop_correction.structure_min_shift_px = 0.0;
   replay(report, "structure BA over every point", file, everything, constraint, groundtruth);
-  for (const double shift : {0.25, 0.5}) {
+  if (std::getenv("SDS_BENCH_GRAPH_VARIANTS")) {
+    sds::mapping::MapperParams variant = defaults;
+    variant.loop_correction.graph.function_tolerance = 1e-4;
+    replay(report, "graph tolerance 1e-4", file, variant, constraint, groundtruth);
+    variant = defaults;
+    variant.loop_correction.covisibility_max_edges = 2;
+    replay(report, "2 co-visibility edges per keyframe", file, variant, constraint, groundtruth);
+    variant = defaults;
+    variant.loop_correction.covisibility_max_edges = 1;
+    replay(report, "1 co-visibility edge per keyframe", file, variant, constraint, groundtruth);
+    variant = defaults;
+    variant.loop_correction.covisibility_min_shared_points = 0;
+    replay(report, "no co-visibility edges", file, variant, constraint, groundtruth);
+  }
+  for (const double shift : {0.1, 0.5}) {
     sds::mapping::MapperParams bounded = defaults;
     bounded.loop_correction.structure_min_shift_px = shift;
     char name[64];
