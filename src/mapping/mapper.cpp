@@ -231,13 +231,29 @@ std::vector<map::PointId> Mapper::refineDisturbedStructure(
     for (const auto& entry : map_.points())
       points.push_back(entry.first);
   }
+  auto distance = [&](map::PointId id) {  // from the point's reference keyframe
+    const map::MapPoint& point = map_.point(id);
+    return map_.hasKeyframe(point.reference_keyframe)
+               ? (map_.keyframe(point.reference_keyframe).T_kf_world * point.p_world).norm()
+               : 0.0;
+  };
+  std::vector<double> before(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    before[i] = distance(points[i]);
   const StructureOnlyBAResult structure =
       refineStructure(map_, points, {focal_length_px_, focal_length_px_}, p.structure);
   stats->structure_points = structure.points + structure.points_skipped;
   stats->reprojection_before = structure.before;  // after the correction, before the refinement
   stats->reprojection_after = structure.after;
+  // Run-away points are pushed outwards by the BA; the others moved with their reference keyframe
+  // and kept their distance from it, up to a factor kPushedOut.
+  constexpr double kPushedOut = 1.5;
+  std::vector<map::PointId> pushed;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (distance(points[i]) > kPushedOut * before[i]) pushed.push_back(points[i]);
+  }
   stats->structure_ms = timer.ms();
-  return points;
+  return pushed;
 }
 
 map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
@@ -252,7 +268,7 @@ map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
   const common::Stopwatch correction_timer;
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
   stats->correction_ms = correction_timer.ms();
-  const std::vector<map::PointId> refined =
+  const std::vector<map::PointId> pushed =
       refineDisturbedStructure(update.keyframe_corrections, stats);
 
   for (const auto& [id, keyframe] : map_.keyframes())
@@ -260,8 +276,10 @@ map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
   update.point_positions.reserve(map_.numPoints());
   for (const auto& [id, point] : map_.points())
     update.point_positions.emplace_back(id, point.p_world);
-  // The others moved with their reference keyframe: their depth there is as it was.
-  removeRunawayPoints(map_, refined, update);
+  // A point the BA did not push outwards moved with its reference keyframe and kept its depth
+  // there (relative to the keyframe's median): it was no run-away before the loop (the window BA
+  // removes them), it is none now, except one already beyond 50 / 1.5 = 33 median depths.
+  removeRunawayPoints(map_, pushed, update);
   map_.bumpVersion();
   update.map_version = map_.version();
   return update;

@@ -2,8 +2,10 @@
 // correction (Mapper::closeLoop) on a map saved just before the loop was found, with the loop
 // constraint the SLAM measured, and reports the time of each step (thread CPU) and what the
 // correction gives: the keyframes' ATE against the ground truth (Sim(3)-aligned) and the
-// reprojection errors of the whole map after the structure-only BA, for the default parameters
-// and for the earlier ones (the structure-only BA over every point). Measures, asserts nothing.
+// reprojection errors of the whole map after the structure-only BA, for the default parameters,
+// other thresholds of the structure-only BA and the earlier parameters (the structure-only BA
+// over every point, LM damping 1e-6), and the pose graph alone with other solver settings against
+// a fully converged solution. Measures, asserts nothing.
 //
 // Usage: bench_loop_correction OUT.json [MAP SUMMARY.json [GROUNDTRUTH]]
 //   MAP          a map file saved before the loop (run_sequence --no-loop-closure --max-frames N
@@ -218,6 +220,10 @@ int main(int argc, char** argv) {
   sds::mapping::MapperParams everything = defaults;
   everything.loop_correction.structure_min_shift_px = 0.0;
   replay(report, "structure BA over every point", file, everything, constraint, groundtruth);
+  sds::mapping::MapperParams earlier = everything;
+  earlier.loop_correction.graph.initial_damping = sds::loop::PoseGraphOptions().initial_damping;
+  replay(report, "earlier parameters (every point, damping 1e-6)", file, earlier, constraint,
+         groundtruth);
   if (std::getenv("SDS_BENCH_GRAPH_VARIANTS")) {
     sds::mapping::MapperParams variant = defaults;
     variant.loop_correction.graph.function_tolerance = 1e-4;

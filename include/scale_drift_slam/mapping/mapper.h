@@ -131,7 +131,8 @@ class Mapper {
   /// and returns the update for the tracker.
   map::MapUpdate correctMap(const loop::PoseGraphResult& solved, LoopCorrectionStatistics* stats);
   /// The structure-only BA after the correction, over the points it disturbed (or all, see
-  /// LoopCorrectionParams::structure_min_shift_px); returns the points it refined.
+  /// LoopCorrectionParams::structure_min_shift_px); returns the points it pushed outwards by
+  /// more than half their distance from their reference keyframe (run-away candidates).
   std::vector<map::PointId> refineDisturbedStructure(
       const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
       LoopCorrectionStatistics* stats);
