@@ -188,6 +188,12 @@ int main(int argc, char** argv) {
       std::snprintf(name, sizeof(name), "tolerance %g", tolerance);
       solveGraph(report, name, file, constraint, options, &reference);
     }
+    for (const int passes : {0, 1, 3}) {
+      sds::loop::PoseGraphOptions options = sds::mapping::LoopCorrectionParams().graph;
+      options.loop_error_passes = passes;
+      solveGraph(report, "default, " + std::to_string(passes) + " guess passes", file, constraint,
+                 options, &reference);
+    }
     for (const double damping : {1e-8, 1e-10, 1e-12}) {
       sds::loop::PoseGraphOptions options = sds::mapping::LoopCorrectionParams().graph;
       options.initial_damping = damping;
