@@ -1,6 +1,7 @@
 #include "scale_drift_slam/mapping/mapper.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <stdexcept>
@@ -65,17 +66,18 @@ void removeRunawayPoints(map::Map& map, const std::vector<map::PointId>& ids,
 }  // namespace
 
 std::string LoopCorrectionStatistics::describe() const {
-  char text[400];
+  char text[480];
   const std::string loop =
       "loop " + std::to_string(constraint.current_id) + " -> " + std::to_string(constraint.loop_id);
   if (!applied) return loop + " not applied: " + reason;
   std::snprintf(text, sizeof(text),
                 " corrected: %s graph of %zu keyframes (%zu co-visibility, %zu loop edges), %d "
                 "iterations%s; times: build %.1f ms, solve %.1f ms, map %.1f ms, structure-only "
-                "BA %.1f ms, total %.1f ms; scale at the current keyframe %.4f",
+                "BA %.1f ms (%zu of %zu points), total %.1f ms; scale at the current keyframe %.4f",
                 loop::toString(mode).c_str(), vertices, covisibility_edges, loop_edges,
                 graph_iterations, graph_converged ? "" : " (not converged)", build_ms, graph_ms,
-                correction_ms, structure_ms, total_ms, current_correction_scale);
+                correction_ms, structure_ms, structure_points, map_points, total_ms,
+                current_correction_scale);
   return loop + text;
 }
 
@@ -85,6 +87,9 @@ void LoopCorrectionParams::validate() const {
   if (covisibility_min_shared_points < 0 || covisibility_max_edges < 0) {
     throw std::invalid_argument(
         "loop correction: covisibility_min_shared_points and covisibility_max_edges must be >= 0");
+  }
+  if (!(structure_min_shift_px >= 0.0) || !std::isfinite(structure_min_shift_px)) {
+    throw std::invalid_argument("loop correction: structure_min_shift_px must be finite and >= 0");
   }
   if (!(loop_edge_weight > 0.0)) {
     throw std::invalid_argument("loop correction: loop_edge_weight must be > 0");
@@ -249,6 +254,51 @@ loop::PoseGraphResult Mapper::solveLoopGraph(const std::vector<loop::PoseGraphEd
   return solved;
 }
 
+std::vector<map::PointId> Mapper::refineDisturbedStructure(
+    const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
+    LoopCorrectionStatistics* stats) {
+  const common::Stopwatch timer;
+  const LoopCorrectionParams& p = params_.loop_correction;
+  stats->map_points = map_.numPoints();
+  std::vector<map::PointId> points;
+  if (p.structure_min_shift_px > 0.0) {
+    points = loop::pointsDisturbedByCorrection(map_, corrections, focal_length_px_,
+                                               p.structure_min_shift_px);
+    stats->structure_selection_ms = timer.ms();
+    if (points.empty()) {
+      stats->structure_ms = timer.ms();
+      return points;
+    }
+  } else {
+    points.reserve(map_.numPoints());
+    for (const auto& entry : map_.points())
+      points.push_back(entry.first);
+  }
+  auto distance = [&](map::PointId id) {  // from the point's reference keyframe
+    const map::MapPoint& point = map_.point(id);
+    return map_.hasKeyframe(point.reference_keyframe)
+               ? (map_.keyframe(point.reference_keyframe).T_kf_world * point.p_world).norm()
+               : 0.0;
+  };
+  std::vector<double> before(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    before[i] = distance(points[i]);
+  const StructureOnlyBAResult structure =
+      refineStructure(map_, points, {focal_length_px_, focal_length_px_}, p.structure);
+  stats->structure_points = structure.points + structure.points_skipped;
+  stats->reprojection_before = structure.before;  // after the correction, before the refinement
+  stats->reprojection_after = structure.after;
+  // Run-away points are pushed outwards by the BA; the others moved with their reference keyframe
+  // and kept their distance from it, up to a factor kPushedOut.
+  constexpr double kPushedOut = 1.5;
+  std::vector<map::PointId> pushed;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (distance(points[i]) > kPushedOut * before[i]) pushed.push_back(points[i]);
+  }
+  stats->structure_ms = timer.ms();
+  return pushed;
+}
+
 map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
                                   LoopCorrectionStatistics* stats) {
   map::MapUpdate update;
@@ -261,21 +311,18 @@ map::MapUpdate Mapper::correctMap(const loop::PoseGraphResult& solved,
   const common::Stopwatch correction_timer;
   loop::applyPoseGraphCorrection(map_, solved.S_kf_world);
   stats->correction_ms = correction_timer.ms();
-  const StructureOnlyBAResult structure = refineStructure(
-      map_, {}, {focal_length_px_, focal_length_px_}, params_.loop_correction.structure);
-  stats->structure_ms = 1e3 * structure.time_s;
-  stats->reprojection_before = structure.before;  // after the correction, before the refinement
-  stats->reprojection_after = structure.after;
+  const std::vector<map::PointId> pushed =
+      refineDisturbedStructure(update.keyframe_corrections, stats);
 
   for (const auto& [id, keyframe] : map_.keyframes())
     update.keyframe_poses.emplace_back(id, keyframe.T_kf_world);
-  std::vector<map::PointId> ids;
-  ids.reserve(map_.numPoints());
-  for (const auto& [id, point] : map_.points()) {
+  update.point_positions.reserve(map_.numPoints());
+  for (const auto& [id, point] : map_.points())
     update.point_positions.emplace_back(id, point.p_world);
-    ids.push_back(id);
-  }
-  removeRunawayPoints(map_, ids, update);
+  // A point the BA did not push outwards moved with its reference keyframe and kept its depth
+  // there (relative to the keyframe's median): it was no run-away before the loop (the window BA
+  // removes them), it is none now, except one already beyond 50 / 1.5 = 33 median depths.
+  removeRunawayPoints(map_, pushed, update);
   map_.bumpVersion();
   update.map_version = map_.version();
   return update;

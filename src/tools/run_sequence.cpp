@@ -167,6 +167,8 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
   for (const mapping::LoopCorrectionStatistics& loop : slam.loops()) {
     if (!loop.applied) continue;
     const loop::LoopConstraint& c = loop.constraint;
+    std::vector<double> S_current_loop(geometry::Sim3::kNumParameters);
+    c.S_current_loop.toData(S_current_loop.data());
     loops.push_back({{"keyframes_before", loopSnapshotName(static_cast<int>(loops.size()))},
                      {"current_keyframe", c.current_id},
                      {"loop_keyframe", c.loop_id},
@@ -175,6 +177,7 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
                      {"inliers", c.num_inliers},
                      {"matches", c.num_matches},
                      {"scale", c.scale},
+                     {"S_current_loop", S_current_loop},  // qx qy qz qw tx ty tz log-scale
                      {"scale_pairs", c.num_scale_pairs},
                      {"rmse_px", c.rmse_px},
                      {"graph_keyframes", loop.vertices},
@@ -186,6 +189,8 @@ nlohmann::json loopsJson(const system::SlamSystem& slam) {
                      {"graph_final_chi2", loop.graph_final_chi2},
                      {"graph_ms", loop.graph_ms},
                      {"structure_only_ba_ms", loop.structure_ms},
+                     {"structure_only_ba_points", loop.structure_points},
+                     {"map_points", loop.map_points},
                      {"correction_ms", loop.total_ms},
                      {"correction_cpu_ms", loop.total_cpu_ms},
                      {"correction_scale_at_current", loop.current_correction_scale},

@@ -160,5 +160,68 @@ TEST(MapCorrection, RefusesBadInputAndLeavesTheMapUntouched) {
   EXPECT_NE(drifted.map.point(0).p_world, p0);
 }
 
+/// The map of makeDriftedMap corrected with C_k = `before` for keyframes < `split` and `after` for
+/// the others (C_k = S_k_new^-1 T_k_old, so S_k_new = T_k_old C_k^-1); returns the corrections.
+std::vector<std::pair<map::KeyframeId, Sim3>> correctInTwoParts(map::Map& map, int split,
+                                                                const Sim3& before,
+                                                                const Sim3& after) {
+  std::vector<std::pair<map::KeyframeId, Sim3>> corrections;
+  std::map<map::KeyframeId, Sim3> S_new;
+  for (const auto& [id, keyframe] : map.keyframes()) {
+    const Sim3& C = static_cast<int>(id) < split ? before : after;
+    corrections.emplace_back(id, C);
+    S_new.emplace(id, Sim3(keyframe.T_kf_world) * C.inverse());
+  }
+  applyPoseGraphCorrection(map, S_new);
+  return corrections;
+}
+
+TEST(DisturbedPoints, OnlyPointsSeenAcrossANonSmoothCorrection) {
+  // Keyframe k observes its own points (5k .. 5k+4, reference k) and those of k-1.
+  const Sim3 C_a =
+      Sim3::exp((Sim3::Tangent() << 0.02, -0.01, 0.03, 0.1, 0.5, -0.2, 0.3).finished());
+  const Sim3 C_b = Sim3::exp((Sim3::Tangent() << -0.01, 0.02, 0.0, 0.3, -0.4, 0.1, 0.2).finished());
+  // One similarity for the whole map moves it rigidly (up to scale): nothing is disturbed.
+  DriftedMap whole = makeDriftedMap(10, 0.9);
+  const auto same = correctInTwoParts(whole.map, 0, C_a, C_a);
+  EXPECT_TRUE(pointsDisturbedByCorrection(whole.map, same, 500.0, 0.01).empty());
+  // Keyframes 0-4 by one similarity and 5-9 by another: the points of keyframe 4, which keyframe
+  // 5 sees too, are disturbed, and only those.
+  DriftedMap split = makeDriftedMap(10, 0.9);
+  const auto two = correctInTwoParts(split.map, 5, C_a, C_b);
+  EXPECT_EQ(pointsDisturbedByCorrection(split.map, two, 500.0, 0.5),
+            (std::vector<map::PointId>{20, 21, 22, 23, 24}));
+  // A tiny threshold: still those five (elsewhere both keyframes moved alike, up to rounding).
+  EXPECT_EQ(pointsDisturbedByCorrection(split.map, two, 500.0, 1e-6).size(), 5u);
+}
+
+TEST(DisturbedPoints, ThresholdInPixels) {
+  // Two keyframes at the origin looking down +z, a point 10 m ahead anchored to keyframe 0. The
+  // correction of keyframe 1 differs from keyframe 0's by 1 cm sideways: in keyframe 1 the point
+  // is seen 0.01 / 10 normalised units = 0.5 px (f = 500) away from where it was seen before.
+  map::Map map;
+  map.addPoint({7, Eigen::Vector3d(0.0, 0.0, 10.0), 0, {}});
+  for (map::KeyframeId id : {0u, 1u}) {
+    map::Keyframe keyframe;
+    keyframe.id = id;
+    keyframe.observations.push_back({7, Eigen::Vector2d::Zero()});
+    map.addKeyframe(keyframe);
+  }
+  const std::vector<std::pair<map::KeyframeId, Sim3>> corrections = {
+      {0, Sim3()}, {1, Sim3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0, 0), 0.0)}};
+  EXPECT_EQ(pointsDisturbedByCorrection(map, corrections, 500.0, 0.45),
+            std::vector<map::PointId>{7});
+  EXPECT_TRUE(pointsDisturbedByCorrection(map, corrections, 500.0, 0.55).empty());
+  // Keyframe 1 without a correction counts as not moved: the same 0.5 px, the other way round.
+  EXPECT_EQ(pointsDisturbedByCorrection(map, {{0, corrections[1].second}}, 500.0, 0.45),
+            std::vector<map::PointId>{7});
+  // Behind the camera after the correction: disturbed whatever the threshold.
+  const std::vector<std::pair<map::KeyframeId, Sim3>> behind = {
+      {0, Sim3()}, {1, Sim3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, -20.0), 0.0)}};
+  EXPECT_EQ(pointsDisturbedByCorrection(map, behind, 500.0, 1e6), std::vector<map::PointId>{7});
+  EXPECT_THROW(pointsDisturbedByCorrection(map, corrections, 0.0, 0.5), std::invalid_argument);
+  EXPECT_THROW(pointsDisturbedByCorrection(map, corrections, 500.0, -1.0), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::loop

@@ -191,5 +191,36 @@ TEST(LoopCorrection, AConstraintThatBreaksTheGraphLeavesLaterLoopsIntact) {
               0.02 * trueLoop(drifted).scale);
 }
 
+TEST(LoopCorrection, StructureOnlyBARefinesThePointsTheCorrectionDisturbed) {
+  // Keyframe i also sees point i-1 (at its true projection): every point but the last has two
+  // observers, and the correction, varying along the loop, moves each one's image a little.
+  DriftedMap drifted = makeDriftedMap(120, 0.004);
+  for (std::size_t i = 1; i < drifted.messages.size(); ++i) {
+    const Eigen::Vector3d seen = drifted.truth.T_kf_world_true[i] * drifted.points_true[i - 1];
+    drifted.messages[i].keyframe.observations.push_back(
+        {static_cast<map::PointId>(i - 1), seen.head<2>() / seen.z()});
+  }
+  auto refined = [&](double min_shift_px) {
+    MapperParams params;
+    params.run_window_ba = false;
+    params.loop_correction.structure_min_shift_px = min_shift_px;
+    Mapper mapper(params, 400.0);
+    for (const map::KeyframeMessage& message : drifted.messages)
+      mapper.addKeyframe(message);
+    LoopCorrectionStatistics stats;
+    mapper.closeLoop(trueLoop(drifted), &stats);
+    EXPECT_TRUE(stats.applied);
+    EXPECT_EQ(stats.map_points, 120u);
+    return stats.structure_points;
+  };
+  EXPECT_EQ(refined(0.0), 120u);  // 0: every point (the last, seen once, is skipped by the BA)
+  EXPECT_EQ(refined(1e9), 0u);    // no image moved that far
+  const std::size_t some = refined(0.25);
+  EXPECT_LE(some, 119u);  // never the point seen by one keyframe only
+  MapperParams negative;
+  negative.loop_correction.structure_min_shift_px = -1.0;
+  EXPECT_THROW(Mapper(negative, 400.0), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::mapping

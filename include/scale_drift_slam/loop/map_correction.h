@@ -8,6 +8,8 @@
 
 #include <cstddef>
 #include <map>
+#include <utility>
+#include <vector>
 
 #include "scale_drift_slam/geometry/sim3.h"
 #include "scale_drift_slam/map/map.h"
@@ -24,5 +26,21 @@ struct MapCorrectionStats {
 /// map untouched, when a pose is not finite or names a keyframe that is not in the map.
 MapCorrectionStats applyPoseGraphCorrection(
     map::Map& map, const std::map<map::KeyframeId, geometry::Sim3>& S_kf_world_corrected);
+
+/// The points of a corrected map that the correction disturbed: those whose image in one of their
+/// observers it moved by more than `min_shift_px` pixels (focal length `focal_length_px`). A
+/// point moves with its reference keyframe r, x_new = C_r x_old, where C_k = S_k_new^-1 T_k_old
+/// is keyframe k's correction (old world -> new world; MapUpdate::keyframe_corrections). In an
+/// observer k it is then seen at pi(T_k_new x_new) against pi(T_k_new C_k C_r^-1 x_new) before
+/// (the same as pi(T_k_old x_old): S_k_new and its rigid pose T_k_new project alike): the two
+/// differ only where the correction is not the same similarity for r and k, i.e. where it is not
+/// smooth (near the loop's ends, across the loop edge), and there a structure-only BA has work to
+/// do; elsewhere a point keeps the reprojection errors it had before the correction, to within
+/// `min_shift_px`. A keyframe without a correction counts as not moved (C = identity); a point
+/// seen behind an observer before or after counts as disturbed. Sorted by id.
+std::vector<map::PointId> pointsDisturbedByCorrection(
+    const map::Map& corrected,
+    const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
+    double focal_length_px, double min_shift_px);
 
 }  // namespace scale_drift_slam::loop

@@ -28,11 +28,16 @@ namespace scale_drift_slam::mapping {
 struct LoopCorrectionParams {
   /// The graph's mode (sim3: the paper; se3: the baseline that cannot correct scale) and solver.
   /// LM stops when chi2 changes by less than 1e-6 relatively: centimetre-level agreement with
-  /// the fully converged graph for a fraction of the iterations (doc/loop_closure.md).
+  /// the fully converged graph for a fraction of the iterations (doc/loop_closure.md). LM starts
+  /// with damping 1e-10, nearly Gauss-Newton: on the 2312-keyframe city_tour graph the
+  /// PoseGraphOptions default 1e-6 (times diag(J^T J)) held back the loop's weak bending modes and
+  /// took 7 iterations where 1e-10 takes 2, to the same optimum (doc/benchmarks.md, "Loop
+  /// correction time"); a step that fails raises the damping as before.
   loop::PoseGraphOptions graph = sixDigits();
   static loop::PoseGraphOptions sixDigits() {
     loop::PoseGraphOptions options;
     options.function_tolerance = 1e-6;
+    options.initial_damping = 1e-10;
     return options;
   }
   /// Co-visibility edges join keyframes sharing at least this many points (0: none), at most
@@ -42,6 +47,11 @@ struct LoopCorrectionParams {
   /// Weight of a loop edge's information relative to an odometry edge's (identity).
   double loop_edge_weight = 1.0;
   StructureOnlyBAOptions structure;
+  /// The structure-only BA refines only the points whose image in one of their observers the
+  /// correction moved by more than this many pixels (loop::pointsDisturbedByCorrection: where the
+  /// correction is not smooth); the others move with their reference keyframe and keep their
+  /// reprojection errors to within this. 0: every point of the map (the earlier behaviour).
+  double structure_min_shift_px = 0.25;
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
@@ -74,10 +84,15 @@ struct LoopCorrectionStatistics {
   /// loop measured (after an earlier correction, the trajectory as tracked is not that map).
   std::vector<std::pair<double, geometry::SE3>> keyframes_before;
   /// Building the graph, solving it, moving keyframes and points, structure-only BA, the whole.
+  /// structure_ms includes choosing the points to refine (loop::pointsDisturbedByCorrection).
   double build_ms = 0.0, graph_ms = 0.0, correction_ms = 0.0, structure_ms = 0.0, total_ms = 0.0;
+  /// Points the structure-only BA refined, of all points of the map.
+  std::size_t structure_points = 0, map_points = 0;
+  double structure_selection_ms = 0.0;  ///< Choosing them (part of structure_ms).
   /// The whole correction's CPU time on the mapping thread (unaffected by other processes).
   double total_cpu_ms = 0.0;
-  /// Reprojection errors after the correction, before and after the structure-only BA.
+  /// Reprojection errors of the refined points after the correction, before and after the
+  /// structure-only BA.
   ReprojectionStats reprojection_before, reprojection_after;
   loop::PoseGraphMode mode = loop::PoseGraphMode::kSim3;
   /// One line for logs: the loop, the graph and the time of each step, or why it was refused.
@@ -130,6 +145,12 @@ class Mapper {
   /// Moves keyframes and points with the solved graph, refines the points (structure-only BA)
   /// and returns the update for the tracker.
   map::MapUpdate correctMap(const loop::PoseGraphResult& solved, LoopCorrectionStatistics* stats);
+  /// The structure-only BA after the correction, over the points it disturbed (or all, see
+  /// LoopCorrectionParams::structure_min_shift_px); returns the points it pushed outwards by
+  /// more than half their distance from their reference keyframe (run-away candidates).
+  std::vector<map::PointId> refineDisturbedStructure(
+      const std::vector<std::pair<map::KeyframeId, geometry::Sim3>>& corrections,
+      LoopCorrectionStatistics* stats);
 
   MapperParams params_;
   double focal_length_px_;
