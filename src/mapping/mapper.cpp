@@ -34,11 +34,28 @@ double medianDepth(const map::Map& map, const map::Keyframe& keyframe) {
   return depths[depths.size() / 2];
 }
 
+/// Removes the points (ids in increasing order) from the map, takes them out of the update's
+/// positions (the window BA may have moved some of them just now) and lists them as removed.
+void removePoints(map::Map& map, const std::vector<map::PointId>& sorted_ids,
+                  map::MapUpdate& update) {
+  if (sorted_ids.empty()) return;
+  for (const map::PointId id : sorted_ids)
+    map.removePoint(id);
+  auto removed = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
+    return std::binary_search(sorted_ids.begin(), sorted_ids.end(), entry.first);
+  };
+  update.point_positions.erase(
+      std::remove_if(update.point_positions.begin(), update.point_positions.end(), removed),
+      update.point_positions.end());
+  update.removed_points.insert(update.removed_points.end(), sorted_ids.begin(), sorted_ids.end());
+}
+
 /// Removes the run-away points among `ids` from the map and lists them in the update (the
 /// tracker and the loop closer drop them too); their positions are taken out of the update.
 void removeRunawayPoints(map::Map& map, const std::vector<map::PointId>& ids,
                          map::MapUpdate& update) {
   std::unordered_map<map::KeyframeId, double> median;
+  std::vector<map::PointId> runaway;
   for (const map::PointId id : ids) {
     if (!map.hasPoint(id)) continue;
     const map::MapPoint& point = map.point(id);
@@ -47,20 +64,10 @@ void removeRunawayPoints(map::Map& map, const std::vector<map::PointId>& ids,
     auto it = median.find(keyframe.id);
     if (it == median.end()) it = median.emplace(keyframe.id, medianDepth(map, keyframe)).first;
     const double depth = (keyframe.T_kf_world * point.p_world).norm();
-    if (it->second > 0.0 && depth > kRunawayDepthRatio * it->second)
-      update.removed_points.push_back(id);
+    if (it->second > 0.0 && depth > kRunawayDepthRatio * it->second) runaway.push_back(id);
   }
-  if (update.removed_points.empty()) return;
-  std::sort(update.removed_points.begin(), update.removed_points.end());
-  for (const map::PointId id : update.removed_points)
-    map.removePoint(id);
-  auto removed = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
-    return std::binary_search(update.removed_points.begin(), update.removed_points.end(),
-                              entry.first);
-  };
-  update.point_positions.erase(
-      std::remove_if(update.point_positions.begin(), update.point_positions.end(), removed),
-      update.point_positions.end());
+  std::sort(runaway.begin(), runaway.end());
+  removePoints(map, runaway, update);
 }
 
 }  // namespace
@@ -147,23 +154,9 @@ map::MapUpdate Mapper::addKeyframe(map::KeyframeMessage message,
   return update;
 }
 
-void Mapper::removePoints(const std::vector<map::PointId>& sorted_ids, map::MapUpdate& update) {
-  if (sorted_ids.empty()) return;
-  for (const map::PointId id : sorted_ids)
-    map_.removePoint(id);
-  // The window BA may have moved some of them just now: the update must not name them again.
-  auto removed = [&](const std::pair<map::PointId, Eigen::Vector3d>& entry) {
-    return std::binary_search(sorted_ids.begin(), sorted_ids.end(), entry.first);
-  };
-  update.point_positions.erase(
-      std::remove_if(update.point_positions.begin(), update.point_positions.end(), removed),
-      update.point_positions.end());
-  update.removed_points.insert(update.removed_points.end(), sorted_ids.begin(), sorted_ids.end());
-}
-
 void Mapper::cullWeakPoints(map::MapUpdate& update) {
   const std::vector<map::PointId> weak = weakPoints(map_, params_.point_culling);
-  removePoints(weak, update);
+  removePoints(map_, weak, update);
   culled_points_ += weak.size();
 }
 
@@ -180,7 +173,7 @@ void Mapper::cullRedundantKeyframe(map::MapUpdate& update) {
   for (const map::PointId id : map_.clearObservations(*redundant)) {
     if (map_.point(id).observed_by.size() < 2) orphans.push_back(id);
   }
-  removePoints(orphans, update);  // sorted: clearObservations returns increasing ids
+  removePoints(map_, orphans, update);  // sorted: clearObservations returns increasing ids
   update.culled_keyframes.push_back(*redundant);
   ++culled_keyframes_;
 }

@@ -134,8 +134,6 @@ class Mapper {
   /// Culls the redundant keyframe (keyframe_culling.h), if any, and the points it leaves seen by
   /// fewer than two keyframes, and lists them in the update.
   void cullRedundantKeyframe(map::MapUpdate& update);
-  /// Removes the points from the map and the update's positions and lists them as removed.
-  void removePoints(const std::vector<map::PointId>& sorted_ids, map::MapUpdate& update);
   /// The loop edge of a constraint, weighted by loop_correction.loop_edge_weight.
   loop::PoseGraphEdge loopEdge(const loop::LoopConstraint& constraint) const;
   /// Builds the pose graph over all keyframes with these loop edges and solves it; throws
