@@ -30,7 +30,9 @@ void ActiveSearchParams::validate() const {
 
 bool PointAppearance::cut(const ImagePyramid& image, const Eigen::Vector2d& px) {
   const int r = kPatchRadius;
-  has_patches_ = false;
+  pixels_.clear();
+  compressed_ = false;
+  std::vector<std::uint8_t> pixels(kLevels * kPatchPixels);
   for (int level = 0; level < kLevels; ++level) {
     const cv::Mat* source = level < image.numLevels() ? &image.levels[level] : nullptr;
     const double s = level == 0 ? 1.0 : 0.5;
@@ -40,20 +42,20 @@ bool PointAppearance::cut(const ImagePyramid& image, const Eigen::Vector2d& px) 
         y0 + kPatchSide > source->rows) {
       return false;  // empty(): no half-cut appearance
     }
-    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels_.data() + level * kPatchSide * kPatchSide);
+    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels.data() + level * kPatchPixels);
     (*source)(cv::Rect(x0, y0, kPatchSide, kPatchSide)).copyTo(into);
   }
-  has_patches_ = true;
+  pixels_ = std::move(pixels);
   px_reference = px;
   return true;
 }
 
 void PointAppearance::setPatches(const cv::Mat& level0, const cv::Mat& level1) {
-  if (level0.empty() && level1.empty()) {
-    has_patches_ = false;
-    return;
-  }
+  pixels_.clear();
+  compressed_ = false;
+  if (level0.empty() && level1.empty()) return;
   const cv::Mat* levels[kLevels] = {&level0, &level1};
+  std::vector<std::uint8_t> pixels(kLevels * kPatchPixels);
   for (int level = 0; level < kLevels; ++level) {
     const cv::Mat& from = *levels[level];
     if (from.type() != CV_8UC1 || from.rows != kPatchSide || from.cols != kPatchSide) {
@@ -61,17 +63,67 @@ void PointAppearance::setPatches(const cv::Mat& level0, const cv::Mat& level1) {
                                   " patch is not a grey " + std::to_string(kPatchSide) + " x " +
                                   std::to_string(kPatchSide) + " image");
     }
-    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels_.data() + level * kPatchSide * kPatchSide);
+    cv::Mat into(kPatchSide, kPatchSide, CV_8UC1, pixels.data() + level * kPatchPixels);
     from.copyTo(into);
   }
-  has_patches_ = true;
+  pixels_ = std::move(pixels);
 }
 
+namespace {
+
+/// Bytes of one compressed level: two 4-bit codes per byte.
+constexpr int kPackedLevelBytes = (PointAppearance::kPatchPixels + 1) / 2;
+
+std::uint8_t decodePixel(const std::uint8_t* packed, int i, std::uint8_t low, float step) {
+  const int code = (i % 2 == 0) ? packed[i / 2] & 0x0F : packed[i / 2] >> 4;
+  return cv::saturate_cast<std::uint8_t>(low + code * step);
+}
+
+}  // namespace
+
 cv::Mat PointAppearance::patch(int level) const {
-  if (!has_patches_ || level < 0 || level >= kLevels) return cv::Mat();
-  // A header over this object's pixels; the callers only read it.
-  return cv::Mat(kPatchSide, kPatchSide, CV_8UC1,
-                 const_cast<std::uint8_t*>(pixels_.data()) + level * kPatchSide * kPatchSide);
+  if (empty() || level < 0 || level >= kLevels) return cv::Mat();
+  if (!compressed_) {
+    // A header over this object's pixels; the callers only read it.
+    return cv::Mat(kPatchSide, kPatchSide, CV_8UC1,
+                   const_cast<std::uint8_t*>(pixels_.data()) + level * kPatchPixels);
+  }
+  cv::Mat decoded(kPatchSide, kPatchSide, CV_8UC1);
+  const std::uint8_t* packed = pixels_.data() + level * kPackedLevelBytes;
+  for (int i = 0; i < kPatchPixels; ++i)
+    decoded.data[i] = decodePixel(packed, i, low_[level], step_[level]);
+  return decoded;
+}
+
+void PointAppearance::compress() {
+  if (empty() || compressed_) return;
+  std::vector<std::uint8_t> packed(kLevels * kPackedLevelBytes, 0);
+  for (int level = 0; level < kLevels; ++level) {
+    const std::uint8_t* from = pixels_.data() + level * kPatchPixels;
+    const auto [lo, hi] = std::minmax_element(from, from + kPatchPixels);
+    low_[level] = *lo;
+    step_[level] = static_cast<float>(*hi - *lo) / 15.0f;
+    std::uint8_t* into = packed.data() + level * kPackedLevelBytes;
+    for (int i = 0; i < kPatchPixels; ++i) {
+      const int code =
+          step_[level] > 0.0f ? static_cast<int>(std::lround((from[i] - *lo) / step_[level])) : 0;
+      into[i / 2] |= static_cast<std::uint8_t>((i % 2 == 0) ? code : code << 4);
+    }
+  }
+  pixels_ = std::move(packed);  // a buffer of exactly the packed size
+  compressed_ = true;
+}
+
+void PointAppearance::expand() {
+  if (empty() || !compressed_) return;
+  std::vector<std::uint8_t> pixels(kLevels * kPatchPixels);
+  for (int level = 0; level < kLevels; ++level) {
+    const std::uint8_t* packed = pixels_.data() + level * kPackedLevelBytes;
+    for (int i = 0; i < kPatchPixels; ++i)
+      pixels[level * kPatchPixels + i] = decodePixel(packed, i, low_[level], step_[level]);
+  }
+  pixels_ = std::move(pixels);
+  compressed_ = false;
 }
 
 Eigen::Matrix2d referenceWarp(const geometry::CameraModel& camera, const Eigen::Vector3d& p_ref,

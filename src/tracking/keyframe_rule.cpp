@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -25,6 +26,12 @@ void KeyframeRuleParams::validate() const {
   if (min_certain_candidates < 0) {
     throw std::invalid_argument("keyframe rule: min_certain_candidates must be >= 0");
   }
+  if (!(max_distance_to_depth_ratio == 0.0 ||
+        max_distance_to_depth_ratio >= distance_to_depth_ratio) ||
+      !std::isfinite(max_distance_to_depth_ratio)) {
+    throw std::invalid_argument(
+        "keyframe rule: max_distance_to_depth_ratio must be 0 or >= distance_to_depth_ratio");
+  }
   if (!(max_view_turn_fraction >= 0.0) || !std::isfinite(max_view_turn_fraction)) {
     throw std::invalid_argument("keyframe rule: max_view_turn_fraction must be >= 0");
   }
@@ -42,6 +49,34 @@ double medianSceneDepth(const geometry::SE3& T_cam_world,
     throw std::invalid_argument("scene depth: no point lies in front of the camera");
   }
   return common::upperMedian(std::move(depths));
+}
+
+double medianParallax(const std::vector<Eigen::Vector3d>& points_world, const Eigen::Vector3d& from,
+                      const Eigen::Vector3d& to) {
+  std::vector<double> angles;
+  angles.reserve(points_world.size());
+  for (const Eigen::Vector3d& p : points_world) {
+    const Eigen::Vector3d a = p - from;
+    const Eigen::Vector3d b = p - to;
+    const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+    if (std::isfinite(angle)) angles.push_back(angle);
+  }
+  if (angles.empty()) return std::numeric_limits<double>::quiet_NaN();
+  return common::upperMedian(std::move(angles));
+}
+
+std::string keyframeReason(const KeyframeDecision& decision) {
+  if (decision.view_leaving_map) return "keyframe: view leaving the map";
+  if (decision.view_turned) return "keyframe: view turned";
+  char text[128];
+  if (std::isnan(decision.parallax)) {
+    std::snprintf(text, sizeof(text), "keyframe: moved %.3g (threshold %.3g)", decision.distance,
+                  decision.threshold);
+  } else {
+    std::snprintf(text, sizeof(text), "keyframe: moved %.3g (threshold %.3g), parallax %.2f deg",
+                  decision.distance, decision.threshold, decision.parallax * 180.0 / M_PI);
+  }
+  return text;
 }
 
 KeyframeDecision decideKeyframe(
@@ -64,6 +99,20 @@ KeyframeDecision decideKeyframe(
     }
   }
   decision.drop = decision.distance > decision.threshold;
+  // Keyframes within this distance cover the view (the view-turn rule below).
+  double reach = decision.threshold;
+  if (decision.drop && tracked && !tracked->points_world.empty() &&
+      params.max_distance_to_depth_ratio > params.distance_to_depth_ratio) {
+    // The parallax a sideways motion of the threshold gives points at the scene depth.
+    Eigen::Vector3d closest_centre = camera_centre_world;
+    for (const auto& [id, centre] : keyframe_centres) {
+      if (id == decision.closest) closest_centre = centre;
+    }
+    decision.parallax = medianParallax(tracked->points_world, closest_centre, camera_centre_world);
+    reach = params.max_distance_to_depth_ratio * scene_depth;
+    decision.drop = !(decision.parallax < std::atan(params.distance_to_depth_ratio)) ||
+                    decision.distance > reach;
+  }
   // Parallax for new points: the camera moved, or the new features' filters measured it (their
   // depths are certain, at a fast pan after a few frames, long before the distance is reached).
   const bool parallax = decision.distance > params.min_distance_fraction * decision.threshold ||
@@ -88,7 +137,7 @@ KeyframeDecision decideKeyframe(
     const double max_turn = params.max_view_turn_fraction * view->field_of_view;
     bool covered = false;
     for (std::size_t k = 0; k < keyframe_centres.size() && !covered; ++k) {
-      if ((keyframe_centres[k].second - camera_centre_world).norm() > decision.threshold) continue;
+      if ((keyframe_centres[k].second - camera_centre_world).norm() > reach) continue;
       const double cos_turn = std::clamp(view->keyframes[k].dot(view->current), -1.0, 1.0);
       covered = std::acos(cos_turn) <= max_turn;
     }

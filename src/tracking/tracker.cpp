@@ -11,6 +11,9 @@
 namespace scale_drift_slam::tracking {
 
 void TrackerParams::validate() const {
+  if (compress_idle_patches_after_frames < 0) {
+    throw std::invalid_argument("tracker.compress_idle_patches_after_frames must be >= 0");
+  }
   if (pyramid_levels < 1 || pyramid_levels > 8) {
     throw std::invalid_argument("tracker.pyramid_levels must be in [1, 8]");
   }
@@ -319,6 +322,7 @@ map::PointId Tracker::addNewPoint(const Eigen::Vector3d& p_world,
   point.p_world = p_world;
   point.reference_keyframe = reference_keyframe;
   point.appearance = std::move(appearance);
+  point.last_selected_frame = frame_index_;  // new: not idle
   message->new_points.push_back({point.id, p_world, reference_keyframe});
   map_.addPoint(std::move(point));
   return next_point_id_ - 1;

@@ -78,11 +78,17 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   if (localization_only_) return;
   const ViewDirections view{T_cam_world.rotation().conjugate() * Eigen::Vector3d::UnitZ(),
                             map_.keyframeViewAxes(), field_of_view_};
-  const KeyframeDecision decision = decideKeyframe(
-      T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
-      params_.keyframes,
-      TrackedPoints{result->num_inliers, tracked_at_keyframe_, candidates_.numCertain()}, view);
-  if (decision.drop) dropKeyframe(timestamp, image, inliers, result);
+  TrackedPoints tracked{result->num_inliers, tracked_at_keyframe_, candidates_.numCertain(), {}};
+  tracked.points_world.reserve(inliers.size());
+  for (const Measurement& m : inliers)
+    tracked.points_world.push_back(map_.point(m.id).p_world);
+  const KeyframeDecision decision =
+      decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
+                     params_.keyframes, tracked, view);
+  if (decision.drop) {
+    dropKeyframe(timestamp, image, inliers, result);
+    if (result->message.empty()) result->message = keyframeReason(decision);
+  }
   result->times.keyframe = stage.lapMs();
 }
 
@@ -239,6 +245,12 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
   rememberKeyframePoints(message, image);
+  // Idle points' patches compressed, swept every half period (a pass over the points).
+  const auto idle = static_cast<std::uint64_t>(params_.compress_idle_patches_after_frames);
+  if (idle > 0 && frame_index_ >= last_patch_sweep_frame_ + idle / 2) {
+    map_.compressIdlePatches(frame_index_, idle);
+    last_patch_sweep_frame_ = frame_index_;
+  }
   result->keyframes.push_back(std::move(message));
 }
 

@@ -134,6 +134,16 @@ std::unordered_set<map::KeyframeId> TrackingMap::neighbourhood(
   return reached;
 }
 
+std::size_t TrackingMap::compressIdlePatches(std::uint64_t frame, std::uint64_t idle_frames) {
+  std::size_t compressed = 0;
+  for (auto& [id, point] : points_) {
+    if (point.appearance.compressed() || point.last_selected_frame + idle_frames > frame) continue;
+    point.appearance.compress();
+    ++compressed;
+  }
+  return compressed;
+}
+
 std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera_centre,
                                                    int num_recent, int num_nearest,
                                                    const std::vector<map::PointId>& tracked,
@@ -171,6 +181,7 @@ std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera
       const auto it = points_.find(point_id);
       if (it == points_.end() || it->second.last_selected_frame == frame) continue;
       it->second.last_selected_frame = frame;
+      it->second.appearance.expand();
       selected.push_back(point_id);
     }
   }

@@ -123,6 +123,63 @@ TEST(ActiveSearch, FindsPointsInARotatedCloserView) {
   EXPECT_LT(o.median_error_px, 0.3);
 }
 
+TEST(PointAppearance, CompressedPatchesKeepHalfThePixelsWithin1Of30OfTheirRange) {
+  const WallScene s = makeScene(geometry::SE3());
+  PointAppearance appearance;
+  ASSERT_TRUE(appearance.cut(s.ref, Eigen::Vector2d(200.0, 150.0)));
+  const cv::Mat original[2] = {appearance.patch(0).clone(), appearance.patch(1).clone()};
+  const std::size_t full_bytes = appearance.pixelBytes();
+  appearance.compress();
+  EXPECT_TRUE(appearance.compressed());
+  EXPECT_LE(appearance.pixelBytes(), full_bytes / 2 + 1);
+  appearance.compress();  // idempotent
+  for (int level = 0; level < 2; ++level) {
+    double lo = 0.0, hi = 0.0;
+    cv::minMaxLoc(original[level], &lo, &hi);
+    ASSERT_GT(hi - lo, 20.0);  // a textured patch: the bound below means something
+    const cv::Mat decoded = appearance.patch(level);
+    ASSERT_EQ(decoded.size(), original[level].size());
+    EXPECT_LE(cv::norm(decoded, original[level], cv::NORM_INF), (hi - lo) / 30.0 + 0.5);
+    EXPECT_GT(cv::norm(decoded, original[level], cv::NORM_INF), 0.0);  // lossy, not a copy
+  }
+  // Expanded: 8 bits again, the same (quantised) pixels as the compressed form gave.
+  const cv::Mat decoded0 = appearance.patch(0).clone();
+  appearance.expand();
+  EXPECT_FALSE(appearance.compressed());
+  EXPECT_EQ(appearance.pixelBytes(), full_bytes);
+  EXPECT_EQ(cv::norm(appearance.patch(0), decoded0, cv::NORM_INF), 0.0);
+  // A flat patch compresses to itself.
+  PointAppearance flat;
+  flat.setPatches(cv::Mat(21, 21, CV_8UC1, cv::Scalar(77)),
+                  cv::Mat(21, 21, CV_8UC1, cv::Scalar(9)));
+  flat.compress();
+  EXPECT_EQ(cv::norm(flat.patch(0), cv::Mat(21, 21, CV_8UC1, cv::Scalar(77)), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(flat.patch(1), cv::Mat(21, 21, CV_8UC1, cv::Scalar(9)), cv::NORM_INF), 0.0);
+  PointAppearance none;
+  none.compress();
+  EXPECT_TRUE(none.empty());
+}
+
+TEST(ActiveSearch, CompressedThenExpandedPatchesFindThePointsAsWell) {
+  // The rotated, closer view of the test above, searched with patches that were compressed.
+  const geometry::SE3 T_world_cur(geometry::expSO3(Eigen::Vector3d(0.02, -0.03, 0.35)),
+                                  Eigen::Vector3d(0.1, 0.05, 0.6));
+  WallScene s = makeScene(T_world_cur.inverse());
+  const geometry::SE3 prior =
+      geometry::SE3::exp(
+          (Eigen::Matrix<double, 6, 1>() << 0.004, -0.006, 0.003, 0.01, -0.01, 0.005).finished()) *
+      s.T_cur_world;
+  const Outcome full = search(s, prior, 0.01);
+  for (PointAppearance& appearance : s.appearances) {
+    appearance.compress();
+    appearance.expand();
+  }
+  const Outcome quantised = search(s, prior, 0.01);
+  ASSERT_GT(quantised.visible, 150);
+  EXPECT_GT(quantised.found, 0.95 * full.found);
+  EXPECT_LT(quantised.median_error_px, 0.3);
+}
+
 TEST(ActiveSearch, DoesNotMatchOutsideTheRegion) {
   const WallScene s = makeScene(
       geometry::SE3(geometry::expSO3(Eigen::Vector3d(0, 0.02, 0)), Eigen::Vector3d(-0.1, 0, 0)));

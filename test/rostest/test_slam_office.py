@@ -72,8 +72,9 @@ class SlamOnBag(unittest.TestCase):
         wall_rate = (len(tf_wall) - 1) / (tf_wall[-1] - tf_wall[0])
         self.assertGreater(sim_rate, 29.0)
 
-        # Keyframes and a growing map.
-        self.assertGreaterEqual(len(keyframes), 10)
+        # Keyframes and a growing map (9-11 keyframes over the orbit since the keyframe rule waits
+        # for the parallax a sideways step gives; 16-19 before).
+        self.assertGreaterEqual(len(keyframes), 6)
         self.assertEqual([k.id for k in keyframes], list(range(len(keyframes))))
         self.assertTrue(all(k.image.encoding == 'mono8' and k.camera.K[0] > 0 for k in keyframes))
         self.assertGreater(clouds[-1], 1000)

@@ -124,6 +124,49 @@ TEST(KeyframeRule, DropsWhenTheViewTurnedAwayFromTheNearbyKeyframes) {
                std::invalid_argument);
 }
 
+TEST(KeyframeRule, DrivingForwardWaitsForTheParallaxASidewaysStepWouldGive) {
+  // Points on two walls 4 m to either side and 20-60 m ahead; the camera drives along z.
+  std::vector<Eigen::Vector3d> walls;
+  for (int i = 0; i <= 40; ++i) {
+    walls.emplace_back(-4.0, 0.0, 20.0 + i);
+    walls.emplace_back(4.0, 0.0, 20.0 + i);
+  }
+  const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframes = {
+      {7, Eigen::Vector3d(0, 0, 0)}};
+  KeyframeRuleParams params;  // 0.1 x depth; forward up to 0.25 x depth
+  const double depth = 40.0;  // threshold 4 m
+  TrackedPoints tracked{200, 200, 0, walls};
+  // 5 m forward: past the distance, but the points' median parallax is ~0.6 deg, far below
+  // atan(0.1) = 5.7 deg: wait.
+  KeyframeDecision d = decideKeyframe(Eigen::Vector3d(0, 0, 5), keyframes, depth, params, tracked);
+  EXPECT_FALSE(d.drop);
+  EXPECT_NEAR(d.parallax, medianParallax(walls, Eigen::Vector3d::Zero(), {0, 0, 5}), 1e-12);
+  EXPECT_LT(d.parallax, 0.02);
+  // Without the points (or with the rule off) the distance alone decides.
+  EXPECT_TRUE(decideKeyframe(Eigen::Vector3d(0, 0, 5), keyframes, depth, params).drop);
+  params.max_distance_to_depth_ratio = 0.0;
+  EXPECT_TRUE(decideKeyframe(Eigen::Vector3d(0, 0, 5), keyframes, depth, params, tracked).drop);
+  params.max_distance_to_depth_ratio = 0.25;
+  // Beyond 0.25 x depth (10 m) it drops whatever the parallax.
+  EXPECT_TRUE(decideKeyframe(Eigen::Vector3d(0, 0, 10.5), keyframes, depth, params, tracked).drop);
+  // The same 5 m sideways past points 40 m ahead: parallax ~7 deg, drop at the distance.
+  std::vector<Eigen::Vector3d> ahead;
+  for (int i = -20; i <= 20; ++i)
+    ahead.emplace_back(i, 0.0, depth);
+  tracked.points_world = ahead;
+  d = decideKeyframe(Eigen::Vector3d(5, 0, 0), keyframes, depth, params, tracked);
+  EXPECT_TRUE(d.drop);
+  EXPECT_GT(d.parallax, std::atan(0.1));
+  // While the forward step waits, the keyframe behind still covers the view (no view-turn drop).
+  tracked.points_world = walls;
+  const ViewDirections view{
+      Eigen::Vector3d(std::sin(0.2), 0, std::cos(0.2)), {Eigen::Vector3d::UnitZ()}, 1.0};
+  EXPECT_FALSE(
+      decideKeyframe(Eigen::Vector3d(0, 0, 5), keyframes, depth, params, tracked, view).drop);
+  params.max_distance_to_depth_ratio = 0.05;  // below the distance ratio
+  EXPECT_THROW(params.validate(), std::invalid_argument);
+}
+
 TEST(KeyframeRule, MedianSceneDepthIgnoresPointsBehindTheCamera) {
   const geometry::SE3 T(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 1));
   EXPECT_NEAR(medianSceneDepth(T, {{0, 0, 1}, {0, 0, 2}, {0, 0, 3}, {0, 0, -5}}), 3.0, 1e-12);

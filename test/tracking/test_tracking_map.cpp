@@ -112,6 +112,29 @@ TEST(TrackingMap, LocalPointsFromNewestAndNearestKeyframes) {
   EXPECT_EQ(map.keyframeCentres().size(), 4u);
 }
 
+TEST(TrackingMap, IdlePointsPatchesAreCompressedAndExpandedWhenSelectedAgain) {
+  TrackingMap map = smallMap();
+  cv::Mat level0(21, 21, CV_8UC1), level1(21, 21, CV_8UC1);
+  cv::randu(level0, 0, 255);
+  cv::randu(level1, 0, 255);
+  for (map::PointId id = 0; id < 8; ++id) {
+    map.point(id).appearance.setPatches(level0, level1);
+    map.point(id).last_selected_frame = id < 4 ? 10 : 95;  // points 4-7 searched recently
+  }
+  // Frame 100, idle after 50 frames: points 0-3 (last searched at frame 10) are compressed.
+  EXPECT_EQ(map.compressIdlePatches(100, 50), 4u);
+  for (map::PointId id = 0; id < 8; ++id)
+    EXPECT_EQ(map.point(id).appearance.compressed(), id < 4) << id;
+  EXPECT_EQ(map.compressIdlePatches(100, 50), 0u);  // nothing new
+  // Keyframe 0 (points 0 and 1; point 1 tracked in the last frame brings it into the tracked
+  // region) selected again: their patches are 8 bits again.
+  map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {1}, 1, 101);
+  EXPECT_FALSE(map.point(0).appearance.compressed());
+  EXPECT_FALSE(map.point(1).appearance.compressed());
+  EXPECT_TRUE(map.point(2).appearance.compressed());
+  EXPECT_LE(cv::norm(map.point(0).appearance.patch(0), level0, cv::NORM_INF), 255.0 / 30 + 0.5);
+}
+
 TEST(TrackingMap, NearestKeyframesComeOnlyFromTheCovisibleNeighbourhood) {
   TrackingMap map = smallMap();  // no keyframes share points: none is linked to the newest (3)
   std::vector<map::PointId> ids = map.localPoints(Eigen::Vector3d(0.1, 0, 0), 1, 1, {}, 1, 1);

@@ -36,14 +36,16 @@ struct ActiveSearchParams {
 };
 
 /// A point's appearance, cut from its reference keyframe at creation: square patches around its
-/// pixel at pyramid levels 0 and 1, and where they sit. The pixels live in the object itself (no
-/// allocation of their own): the tracker keeps one per map point, for the whole run (issue 18,
-/// memory per keyframe).
+/// pixel at pyramid levels 0 and 1, and where they sit. The tracker keeps one per map point for
+/// the whole run, so that a revisit finds the point again (issue 18, memory per keyframe): a
+/// point the tracker has not searched for a while is stored compressed, 4 bits per pixel over
+/// each patch's own grey-level range (compress()), and expanded again before it is searched.
 class PointAppearance {
  public:
   static constexpr int kPatchRadius = 10;  ///< Patches of 21 x 21 pixels.
   static constexpr int kPatchSide = 2 * kPatchRadius + 1;
   static constexpr int kLevels = 2;
+  static constexpr int kPatchPixels = kPatchSide * kPatchSide;
   Eigen::Vector2d px_reference = Eigen::Vector2d::Zero();  ///< Level-0 pixel in the reference.
 
   /// Cuts the patches around `px` from `image`. Returns false (and is empty) when too close to
@@ -52,14 +54,26 @@ class PointAppearance {
   /// Sets the patches (CV_8UC1, kPatchSide x kPatchSide each, or both empty: no appearance).
   /// Throws std::invalid_argument on another type or size.
   void setPatches(const cv::Mat& level0, const cv::Mat& level1);
-  /// The patch of `level` (0 or 1): a read-only view of this object's pixels (valid while it
-  /// lives), CV_8UC1, kPatchSide x kPatchSide; empty when nothing was cut.
+  /// The patch of `level` (0 or 1), CV_8UC1, kPatchSide x kPatchSide: a read-only view of this
+  /// object's pixels (valid while it lives and is not compressed or expanded), or a decoded copy
+  /// when compressed; empty when nothing was cut.
   cv::Mat patch(int level) const;
-  bool empty() const { return !has_patches_; }
+  bool empty() const { return pixels_.empty(); }
+
+  /// Keeps the pixels at 4 bits each, quantised between each patch's darkest and brightest
+  /// pixel (half the memory; the error is at most 1/30 of that range). Idempotent.
+  void compress();
+  /// Back to 8 bits per pixel (the quantised values: compression is lossy). Idempotent.
+  void expand();
+  bool compressed() const { return compressed_; }
+  /// Bytes of pixels held (for the memory figures).
+  std::size_t pixelBytes() const { return pixels_.capacity(); }
 
  private:
-  std::array<std::uint8_t, kLevels * kPatchSide * kPatchSide> pixels_{};
-  bool has_patches_ = false;
+  std::vector<std::uint8_t> pixels_;  ///< Levels 0 and 1, row by row; packed when compressed.
+  std::array<std::uint8_t, kLevels> low_{};  ///< Compressed: the darkest pixel of each level...
+  std::array<float, kLevels> step_{};        ///< ...and the grey-level step of one code.
+  bool compressed_ = false;
 };
 
 /// What active search needs of one map point.

@@ -5,6 +5,7 @@
 // a geometric check against repeated texture, and consistency over consecutive queries
 // (doc/place_recognition.md). Loop verification (loop constraint, Sim(3)) comes after it.
 
+#include <deque>
 #include <memory>
 #include <optional>
 #include <string>
@@ -181,7 +182,9 @@ class PlaceRecognizer {
 
   PlaceRecognitionParams params_;
   std::shared_ptr<const Vocabulary> vocabulary_;
-  std::vector<Stored> keyframes_;  ///< In insertion order = document order once indexed.
+  /// In insertion order = document order once indexed. A deque: growing never copies the
+  /// stored keyframes (a vector's reallocation copied them all, a transient peak of memory).
+  std::deque<Stored> keyframes_;
   std::unordered_map<map::KeyframeId, std::size_t> index_of_;
   BowDatabase database_;
   std::vector<ConsistencyGroup> groups_;

@@ -9,7 +9,9 @@
 // and promoted only at keyframes, and must be before the map has left the view). Pure functions;
 // any thread.
 
+#include <limits>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -23,6 +25,12 @@ namespace scale_drift_slam::tracking {
 struct KeyframeRuleParams {
   /// Drop when the distance to the closest keyframe exceeds this fraction of the scene depth.
   double distance_to_depth_ratio = 0.1;
+  /// Forward motion: past that distance the keyframe waits until the tracked points' median
+  /// parallax between the closest keyframe and the camera reaches atan(distance_to_depth_ratio)
+  /// (what the distance gives a sideways motion), but never beyond this fraction of the scene
+  /// depth. Driving forward, points near the direction of travel gain little parallax, and the
+  /// distance alone makes a keyframe every other frame (0: the distance alone).
+  double max_distance_to_depth_ratio = 0.25;
   /// Also drop when the map points tracked fall below this fraction of those tracked at the last
   /// keyframe (0: never)...
   double min_tracked_ratio = 0.5;
@@ -50,6 +58,8 @@ struct TrackedPoints {
   int at_last_keyframe = 0;
   /// New features whose depth is certain (they are promoted at the next keyframe).
   int certain_candidates = 0;
+  /// World positions of the map points tracked now (the parallax of forward motion).
+  std::vector<Eigen::Vector3d> points_world = {};
 };
 
 /// Viewing directions (unit optical axes in the world) for the view-turn rule.
@@ -65,8 +75,20 @@ struct KeyframeDecision {
   bool view_turned = false;       ///< Dropped for the viewing direction, not the distance.
   double distance = 0.0;   ///< To the closest keyframe (map units); infinity when there is none.
   double threshold = 0.0;  ///< distance_to_depth_ratio * scene depth.
+  /// Median parallax (rad) of the tracked points between the closest keyframe and the camera;
+  /// NaN when not measured (the distance alone decided).
+  double parallax = std::numeric_limits<double>::quiet_NaN();
   map::KeyframeId closest = 0;
 };
+
+/// Why a keyframe was dropped, for the frame's message ("keyframe: moved 1.6 of 1.5", "keyframe:
+/// view leaving the map", "keyframe: view turned").
+std::string keyframeReason(const KeyframeDecision& decision);
+
+/// The median over `points_world` of the angle between the rays from `from` and from `to` to
+/// the point (rad); NaN when there is no point.
+double medianParallax(const std::vector<Eigen::Vector3d>& points_world, const Eigen::Vector3d& from,
+                      const Eigen::Vector3d& to);
 
 /// The median depth (z in the camera) of the given world points that lie in front of the camera.
 /// Throws std::invalid_argument when none does.

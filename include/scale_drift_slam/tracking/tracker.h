@@ -59,6 +59,9 @@ struct TrackerParams {
   /// between frames) is tracked again from the newest keyframe's map points matched by ORB
   /// descriptor (PnP RANSAC, then active search around that pose); kept when it has more inliers.
   bool recover_from_keyframe = true;
+  /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
+  /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
+  int compress_idle_patches_after_frames = 100;
   features::FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -236,6 +239,7 @@ class Tracker {
   std::vector<Measurement> previous_measurements_;
   double last_scene_depth_ = 1.0;
   std::uint64_t frame_index_ = 0;
+  std::uint64_t last_patch_sweep_frame_ = 0;  ///< compress_idle_patches_after_frames
   map::KeyframeId next_keyframe_id_ = 0;
   map::PointId next_point_id_ = 0;
   int rejected_in_row_ = 0;

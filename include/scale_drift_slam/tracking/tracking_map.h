@@ -26,7 +26,7 @@ struct TrackedPoint {
   features::PointAppearance appearance;
   int times_searched = 0;                 ///< Frames in which active search tried to match it.
   int times_found = 0;                    ///< ...and matched it.
-  std::uint64_t last_selected_frame = 0;  ///< Bookkeeping of localPoints().
+  std::uint64_t last_selected_frame = 0;  ///< Bookkeeping of localPoints() (or its creation).
 };
 
 struct TrackedKeyframe {
@@ -61,10 +61,14 @@ class TrackingMap {
   /// points) and loop links reaches from it in two steps. So points of a distant part of the map
   /// are not searched just because the drifted pose estimate comes near it: a large loop is closed
   /// by loop closure (Sim(3), scale included), not by silently re-finding old points in a drifted
-  /// frame. `frame` stamps the selection.
+  /// frame. `frame` stamps the selection; the selected points' patches are expanded.
   std::vector<map::PointId> localPoints(const Eigen::Vector3d& camera_centre, int num_recent,
                                         int num_nearest, const std::vector<map::PointId>& tracked,
                                         int min_shared, std::uint64_t frame);
+  /// Compresses the patches of the points not selected by localPoints() (nor created) in the
+  /// last `idle_frames` frames before `frame` (PointAppearance::compress); localPoints() expands
+  /// them again when it selects them. Returns how many it compressed.
+  std::size_t compressIdlePatches(std::uint64_t frame, std::uint64_t idle_frames);
   /// The keyframes within `steps` of `start` in that graph (start included).
   std::unordered_set<map::KeyframeId> neighbourhood(const std::vector<map::KeyframeId>& start,
                                                     int steps, int min_shared) const;
