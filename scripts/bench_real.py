@@ -147,13 +147,15 @@ def last_error_line(text):
 # --- running one sequence ---------------------------------------------------------------------
 
 
-def run_sequence(sequence, bin_dir, out_dir, timeout):
+def run_sequence(sequence, bin_dir, out_dir, timeout, config=None):
     out = out_dir / sequence.name.replace("/", "_")
     out.mkdir(parents=True, exist_ok=True)
     command = ["/usr/bin/time", "-v", "-o", str(out / "time.txt"), str(bin_dir / "run_sequence"),
                str(sequence.dataset), "--out", str(out), "--quiet"]
     if sequence.calibration:
         command += ["--calib", str(sequence.calibration)]
+    if config:
+        command += ["--config", str(config)]
     for stale in ("summary.json", "frames.csv", "trajectory.txt", "evaluation.json"):
         (out / stale).unlink(missing_ok=True)
     started = time.monotonic()
@@ -292,7 +294,8 @@ def header(arguments):
         f"Data: `{arguments.data}`; binaries: `{arguments.bin_dir}`; scripts at "
         f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, "
         f"{platform.machine()}), "
-        f"load average {os.getloadavg()[0]:.1f} at the start.",
+        f"load average {os.getloadavg()[0]:.1f} at the start"
+        f"{f'; parameters `{arguments.config}`' if arguments.config else ''}.",
         "",
     ]
 
@@ -305,6 +308,7 @@ def main():
                         help="folder with run_sequence and evaluate_trajectory")
     parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parent.parent)
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per sequence")
+    parser.add_argument("--config", type=Path, help="parameter file for run_sequence (--config)")
     arguments = parser.parse_args()
     if not arguments.data.is_dir():
         sys.exit(f"bench_real.py: no data folder '{arguments.data}'")
@@ -316,7 +320,8 @@ def main():
         if sequence.failed:
             continue
         print(f"[bench real] {sequence.name} ({sequence.layout})", flush=True)
-        out = run_sequence(sequence, arguments.bin_dir, runs_dir, arguments.timeout)
+        out = run_sequence(sequence, arguments.bin_dir, runs_dir, arguments.timeout,
+                           arguments.config)
         if not sequence.failed:
             evaluate(sequence, arguments.bin_dir, out)
         print("  " + table_row(sequence), flush=True)
