@@ -42,7 +42,7 @@ struct LoopCloserParams {
   /// follows decides). Defaults: the loop's check with min_inliers 30 and min_coverage 0.3.
   GeometricCheckParams relocalisation_geometry = relaxedGeometry();
   static GeometricCheckParams relaxedGeometry();
-  int image_jpeg_quality = 75;  ///< Of the stored keyframe images.
+  int image_jpeg_quality = 60;  ///< Of the stored keyframe images (progressive JPEG).
   /// Throws std::invalid_argument naming the first bad value.
   void validate() const;
 };
