@@ -12,6 +12,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +22,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -56,6 +59,10 @@ calib.txt) or a rosbag (*.bag).
   --topic NAME         bag image topic (default /camera/image_raw)
   --camera-info-topic NAME   bag CameraInfo topic (default /camera/camera_info)
   --max-frames N       stop after N frames (default: all)
+  --rate R             feed the frames at R times the rate of their stamps, as a live camera
+                       or `rosbag play -r R` would (1: real time; the mapping and loop-closure
+                       threads then get the time they have live); default 0: as fast as
+                       tracking goes, so that they may fall behind on a slow machine
   --bit-depth N        16-bit images hold N-bit data (8..16; default: from their values)
   --se3                correct loops with the SE(3) pose graph (the paper's baseline)
   --no-loop-closure    no loop closure (relocalisation still works)
@@ -245,6 +252,7 @@ struct RunOptions {
   std::string dataset;
   fs::path out;
   long max_frames = -1;  // -1: all
+  double rate = 0.0;     // 0: as fast as possible
   bool quiet = false;
   system::SlamParams params;
   std::string save_map, load_map;
@@ -253,12 +261,16 @@ struct RunOptions {
 
 RunOptions parseOptions(const io::CommandLine& args) {
   args.rejectUnknownFlags({"out", "calib", "config", "topic", "camera-info-topic", "max-frames",
-                           "quiet", "se3", "no-loop-closure", "save-map", "load-map",
+                           "rate", "quiet", "se3", "no-loop-closure", "save-map", "load-map",
                            "localization", "bit-depth"});
   RunOptions options;
   options.dataset = args.positional(0, "DATASET");
   options.out = args.required("out");
   options.max_frames = args.integer("max-frames", -1);
+  options.rate = args.number("rate", 0.0);
+  if (!(options.rate >= 0.0) || !std::isfinite(options.rate)) {
+    throw std::invalid_argument("--rate must be a number >= 0 (0: as fast as possible)");
+  }
   options.quiet = args.has("quiet");
   options.save_map = args.text("save-map", "");
   options.load_map = args.text("load-map", "");
@@ -297,6 +309,32 @@ struct RunTally {
 };
 
 /// Feeds the frames to the SLAM, logging each to frames.csv; finishes the background threads.
+/// --rate: holds each frame back until its stamp, relative to the first frame's, has passed on
+/// the wall clock (scaled by the rate). Stamps going back (a bag's) are not waited for.
+class FramePacer {
+ public:
+  explicit FramePacer(double rate) : rate_(rate) {}
+  void waitFor(double stamp) {
+    if (!(rate_ > 0.0)) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (!started_) {
+      started_ = true;
+      first_stamp_ = stamp;
+      start_ = now;
+      return;
+    }
+    const auto due = start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>((stamp - first_stamp_) / rate_));
+    if (due > now) std::this_thread::sleep_until(due);
+  }
+
+ private:
+  double rate_;
+  bool started_ = false;
+  double first_stamp_ = 0.0;
+  std::chrono::steady_clock::time_point start_;
+};
+
 RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
                        system::SlamSystem& slam) {
   RunTally tally;
@@ -305,9 +343,11 @@ RunTally trackSequence(const RunOptions& options, io::ImageSequence& sequence,
   const std::size_t total =
       max_frames >= 0 ? std::min<std::size_t>(max_frames, sequence.size()) : sequence.size();
   const bool progress = !options.quiet && isatty(STDERR_FILENO);
+  FramePacer pacer(options.rate);
   while (max_frames < 0 || tally.frames < max_frames) {
     const std::optional<io::SequenceFrame> frame = sequence.next();
     if (!frame) break;
+    pacer.waitFor(frame->timestamp);
     ++tally.frames;
     const common::Stopwatch frame_timer;
     const double frame_cpu_start = common::threadCpuMs();
@@ -450,6 +490,7 @@ void writeSummaryJson(const RunOptions& options, const system::SlamSystem& slam,
   const std::string& dataset = options.dataset;
   const nlohmann::json summary = {
       {"dataset", dataset},
+      {"rate", options.rate},
       {"frames", tally.frames},
       {"rejected_frames", tally.rejected},
       {"tracked", tally.tracked},
