@@ -100,9 +100,17 @@ void load(Archive& ar, sds::geometry::CameraCalibration& c) {
   c.height = height;
 }
 
+/// Observations are held in single precision and written in double, as before they were held
+/// so (the file format did not change).
 template <class Archive>
-void serialize(Archive& ar, sds::map::Observation& o) {
-  ar(o.point_id, o.xy);
+void save(Archive& ar, const sds::map::Observation& o) {
+  ar(o.point_id, o.xyd());
+}
+template <class Archive>
+void load(Archive& ar, sds::map::Observation& o) {
+  Eigen::Vector2d xy;
+  ar(o.point_id, xy);
+  o.xy = xy.cast<float>();
 }
 
 template <class Archive>

@@ -124,7 +124,7 @@ VerificationView LoopCloser::viewOf(map::KeyframeId id, const KeyframeAppearance
     const Eigen::Vector3d p_cam = keyframe.T_kf_world * map_.point(o.point_id).p_world;
     if (p_cam.z() <= 0.0) continue;
     view.point_ids.push_back(o.point_id);
-    view.point_xy.push_back(o.xy);
+    view.point_xy.push_back(o.xyd());
     view.point_camera.push_back(p_cam);
   }
   if (!image.empty()) view.image = features::buildPyramid(image, pyramid_levels_);

@@ -348,7 +348,7 @@ ReprojectionStats reprojectionStats(const map::Map& map, const Eigen::Vector2d& 
         ++behind;
         continue;
       }
-      const Eigen::Vector2d d = p.head<2>() / p.z() - obs.xy;
+      const Eigen::Vector2d d = p.head<2>() / p.z() - obs.xyd();
       errors.push_back(
           std::sqrt(focal.x() * focal.x() * d.x() * d.x() + focal.y() * focal.y() * d.y() * d.y()));
     }

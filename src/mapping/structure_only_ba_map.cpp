@@ -99,7 +99,7 @@ StructureOnlyProblem makeStructureOnlyProblem(const map::Map& map,
     for (const map::Observation& obs : entry.second.observations) {
       const std::size_t i = index.find(obs.point_id);
       if (i != PointIndex::kNone) {
-        problem.observations[fill[i]++] = {pose, obs.xy};
+        problem.observations[fill[i]++] = {pose, obs.xyd()};
       }
     }
     ++pose;

@@ -95,7 +95,7 @@ WindowBundleInput makeWindowInput(const map::Map& map, const WindowBundleAdjustm
         // Seen by a single window keyframe: fixed (it still constrains that keyframe's pose).
         input.points.push_back({obs.point_id, map.point(obs.point_id).p_world, count.window < 2});
       }
-      input.observations.push_back({k, entry->second, obs.xy});
+      input.observations.push_back({k, entry->second, obs.xyd()});
     }
   }
   return input;

@@ -56,7 +56,8 @@ std::unordered_map<int, Eigen::Vector3d> localStructure(const SimulatedVisualOdo
       const auto [entry, inserted] = pose_index.try_emplace(id, problem.T_cam_world.size());
       if (inserted) problem.T_cam_world.push_back(map.keyframe(id).T_kf_world);
       for (const map::Observation& other : map.keyframe(id).observations) {
-        if (other.point_id == o.point_id) problem.observations.push_back({entry->second, other.xy});
+        if (other.point_id == o.point_id)
+          problem.observations.push_back({entry->second, other.xyd()});
       }
     }
   }

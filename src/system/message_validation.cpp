@@ -69,7 +69,7 @@ std::string observationsProblem(const map::KeyframeMessage& message, const Messa
     problem = sizeProblem(message.new_points.size(), limits.max_new_points, "new points");
   if (!problem.empty()) return problem;
   for (const map::Observation& o : keyframe.observations) {
-    if (badNormalised(o.xy, limits))
+    if (badNormalised(o.xyd(), limits))
       return "an observation of point " + std::to_string(o.point_id) + " at a non-finite or " +
              "absurd position";
   }

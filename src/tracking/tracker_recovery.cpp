@@ -19,7 +19,7 @@ void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
   if (!params_.recover_from_keyframe) return;
   keyframe_points_.image = image.base();  // shared, not copied
   for (const map::Observation& o : message.keyframe.observations) {
-    const std::optional<Eigen::Vector2d> px = camera_->project(o.xy.homogeneous());  // measured
+    const std::optional<Eigen::Vector2d> px = camera_->project(o.xyd().homogeneous());  // measured
     if (!px) continue;
     cv::KeyPoint corner(static_cast<float>(px->x()), static_cast<float>(px->y()), 31.0f);
     corner.class_id = static_cast<int>(keyframe_points_.ids.size());

@@ -33,8 +33,9 @@ TEST(KebleMap, ReadsThePapersMap) {
   // Observation "0, 0 : 244 24": x = (244 - 162) / 195, y = (24 - 125) / -195.
   const map::Observation& first = keble.map.keyframe(0).observations.front();
   EXPECT_EQ(first.point_id, 0u);
-  EXPECT_NEAR(first.xy.x(), 82.0 / 195.0, 1e-15);
-  EXPECT_NEAR(first.xy.y(), 101.0 / 195.0, 1e-15);
+  // Held in single precision (map::Observation): to its last bit.
+  EXPECT_EQ(first.xy.x(), static_cast<float>(82.0 / 195.0));
+  EXPECT_EQ(first.xy.y(), static_cast<float>(101.0 / 195.0));
   // Point 0 is seen by keyframes 0 and 1: it moves with the newest one.
   EXPECT_EQ(keble.map.point(0).reference_keyframe, 1u);
   // The README: median reprojection error about 1.1 px, 90th percentile about 6-8 px.

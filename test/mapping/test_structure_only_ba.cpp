@@ -148,12 +148,13 @@ TEST(StructureOnlyBA, MapAdapterRefinesTheListedPoints) {
       refineStructure(m, {100, 102}, Eigen::Vector2d(kFocal, kFocal), StructureOnlyBAOptions());
   EXPECT_EQ(result.points, 2u);
   EXPECT_EQ(result.observations, 20u);
-  EXPECT_LT((m.point(100).p_world - scene.truth[0]).norm(), 1e-8);
-  EXPECT_LT((m.point(102).p_world - scene.truth[2]).norm(), 1e-8);
+  // Noise-free, but the map holds its observations in single precision (1e-7 relative).
+  EXPECT_LT((m.point(100).p_world - scene.truth[0]).norm(), 1e-6);
+  EXPECT_LT((m.point(102).p_world - scene.truth[2]).norm(), 1e-6);
   EXPECT_EQ(m.point(101).p_world, untouched);
   EXPECT_GT(m.version(), version);
   refineStructure(m, {}, Eigen::Vector2d(kFocal, kFocal), StructureOnlyBAOptions());
-  EXPECT_LT(reprojectionStats(m, Eigen::Vector2d(kFocal, kFocal)).rms, 1e-6);
+  EXPECT_LT(reprojectionStats(m, Eigen::Vector2d(kFocal, kFocal)).rms, 1e-5);
 }
 
 TEST(StructureOnlyBA, RefusesBadInput) {
