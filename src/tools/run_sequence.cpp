@@ -9,6 +9,7 @@
 // state, map, counts and message) and DIR/summary.json (counts, maps, loops, per-stage timing,
 // memory). Exits non-zero with the reason when no frame was tracked.
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -573,6 +574,10 @@ int run(const io::CommandLine& args) {
   const geometry::CameraCalibration calibration = calibrationOf(args, options.dataset, *sequence);
   fs::create_directories(options.out);
   cv::setNumThreads(1);  // one core for tracking; the mapping thread is the second
+  // The tracking, mapping and loop-closure threads hand keyframes to each other; glibc gives each
+  // thread a malloc arena of its own, whose free pages the others do not reuse. Two arenas keep
+  // city_tour (1311 keyframes, real time) 8 MiB lower (doc/benchmarks.md "Memory at city scale").
+  mallopt(M_ARENA_MAX, 2);
   if (!options.quiet) std::cout << "# parameters\n" << io::formatSlamParams(options.params);
   std::cout << "dataset: " << options.dataset << " (" << sequence->describe() << ")\n"
             << "camera: " << calibration.describe() << "\n";

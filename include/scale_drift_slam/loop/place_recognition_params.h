@@ -10,7 +10,7 @@ namespace scale_drift_slam::loop {
 
 /// ORB keypoints and descriptors of one keyframe image, spread over a grid.
 struct AppearanceParams {
-  int max_features = 1000;     ///< Upper bound of keypoints per keyframe.
+  int max_features = 800;      ///< Upper bound of keypoints per keyframe.
   int grid_cols = 8;           ///< The image is cut into grid_cols x grid_rows cells and the
   int grid_rows = 6;           ///< keypoints are taken round-robin from them (spread).
   int pyramid_levels = 8;      ///< ORB scale pyramid.
