@@ -85,6 +85,7 @@ void TrackingMap::linkKeyframes(map::KeyframeId a, map::KeyframeId b) {
 
 void TrackingMap::addPoint(TrackedPoint point) {
   const map::PointId id = point.id;
+  if (!point.appearance.compressed()) expanded_queue_.emplace_back(id, point.last_selected_frame);
   points_[id] = std::move(point);
 }
 
@@ -136,8 +137,17 @@ std::unordered_set<map::KeyframeId> TrackingMap::neighbourhood(
 
 std::size_t TrackingMap::compressIdlePatches(std::uint64_t frame, std::uint64_t idle_frames) {
   std::size_t compressed = 0;
-  for (auto& [id, point] : points_) {
-    if (point.appearance.compressed() || point.last_selected_frame + idle_frames > frame) continue;
+  // Queued in frame order: stop at the first entry not due yet.
+  while (!expanded_queue_.empty() && expanded_queue_.front().second + idle_frames <= frame) {
+    const map::PointId id = expanded_queue_.front().first;
+    expanded_queue_.pop_front();
+    const auto it = points_.find(id);
+    if (it == points_.end() || it->second.appearance.compressed()) continue;  // removed
+    TrackedPoint& point = it->second;
+    if (point.last_selected_frame + idle_frames > frame) {
+      expanded_queue_.emplace_back(id, frame);  // still in use: look again later
+      continue;
+    }
     point.appearance.compress();
     ++compressed;
   }
@@ -181,7 +191,10 @@ std::vector<map::PointId> TrackingMap::localPoints(const Eigen::Vector3d& camera
       const auto it = points_.find(point_id);
       if (it == points_.end() || it->second.last_selected_frame == frame) continue;
       it->second.last_selected_frame = frame;
-      it->second.appearance.expand();
+      if (it->second.appearance.compressed()) {
+        it->second.appearance.expand();
+        expanded_queue_.emplace_back(point_id, frame);
+      }
       selected.push_back(point_id);
     }
   }

@@ -5,6 +5,7 @@
 // frames, so tracking never waits for a lock. Owned by the Tracker; single-threaded.
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <unordered_map>
 #include <unordered_set>
@@ -67,7 +68,8 @@ class TrackingMap {
                                         int min_shared, std::uint64_t frame);
   /// Compresses the patches of the points not selected by localPoints() (nor created) in the
   /// last `idle_frames` frames before `frame` (PointAppearance::compress); localPoints() expands
-  /// them again when it selects them. Returns how many it compressed.
+  /// them again when it selects them. Visits only the points queued `idle_frames` ago or
+  /// earlier. Returns how many it compressed.
   std::size_t compressIdlePatches(std::uint64_t frame, std::uint64_t idle_frames);
   /// The keyframes within `steps` of `start` in that graph (start included).
   std::unordered_set<map::KeyframeId> neighbourhood(const std::vector<map::KeyframeId>& start,
@@ -91,6 +93,10 @@ class TrackingMap {
   std::map<map::KeyframeId, TrackedKeyframe> keyframes_;
   std::unordered_map<map::PointId, TrackedPoint> points_;
   std::uint64_t version_ = 0;
+  /// Points whose patches are expanded, each with the frame it was queued at (added, expanded,
+  /// or found still in use by compressIdlePatches): the sweep visits only the points due, not the
+  /// whole map (a pass over 50 000 points cost the keyframe frame it ran on milliseconds).
+  std::deque<std::pair<map::PointId, std::uint64_t>> expanded_queue_;
   /// The graph of the local map: keyframes observing each point, shared points per keyframe
   /// pair, loop links.
   void addObservation(map::KeyframeId keyframe, map::PointId point);
