@@ -31,6 +31,9 @@ void TrackerParams::validate() const {
   if (good_inliers < min_inliers) {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
   }
+  if (!(recover_on_inlier_share_drop >= 0.0 && recover_on_inlier_share_drop <= 1.0)) {
+    throw std::invalid_argument("tracker.recover_on_inlier_share_drop must be in [0, 1]");
+  }
   if (local_recent_keyframes < 1 || local_nearest_keyframes < 0 ||
       local_covisibility_min_shared < 1) {
     throw std::invalid_argument(

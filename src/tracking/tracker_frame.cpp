@@ -33,7 +33,17 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
     researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
                    &T_cam_world, result);
   }
-  if (params_.recover_from_keyframe && result->num_inliers < params_.good_inliers) {
+  // Few inliers, or a share of inliers among the points found fallen far below its recent
+  // average (a pose from a wrong prior, points matched onto the wrong texture: the share is
+  // ~0.95 on renders, 0.5-0.7 on real images, and a wrong pose halves it): the frame is tried
+  // again from the newest keyframe's points.
+  const double inlier_share =
+      result->num_found > 0 ? static_cast<double>(result->num_inliers) / result->num_found : 0.0;
+  const bool share_dropped =
+      inlier_share_average_ > 0.0 &&
+      inlier_share < params_.recover_on_inlier_share_drop * inlier_share_average_;
+  if (params_.recover_from_keyframe &&
+      (result->num_inliers < params_.good_inliers || share_dropped)) {
     recoverFromKeyframe(image, corners, ids, search_points, &matches, &inliers, &T_cam_world,
                         result);
   }
@@ -69,6 +79,10 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   T_previous_world_ = T_cam_world;
   previous_measurements_ = inliers;
   last_scene_depth_ = sceneDepth(T_cam_world);
+  const double final_share =
+      static_cast<double>(result->num_inliers) / std::max(result->num_found, result->num_inliers);
+  inlier_share_average_ =
+      inlier_share_average_ > 0.0 ? 0.8 * inlier_share_average_ + 0.2 * final_share : final_share;
   result->has_pose = true;
   result->T_cam_world = T_cam_world;
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
@@ -245,7 +259,7 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
   rememberKeyframePoints(message, image);
-  // Idle points' patches compressed, swept every half period (a pass over the points).
+  // Idle points' patches compressed, looked at every half period (the points due only).
   const auto idle = static_cast<std::uint64_t>(params_.compress_idle_patches_after_frames);
   if (idle > 0 && frame_index_ >= last_patch_sweep_frame_ + idle / 2) {
     map_.compressIdlePatches(frame_index_, idle);

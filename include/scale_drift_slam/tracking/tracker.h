@@ -59,6 +59,11 @@ struct TrackerParams {
   /// between frames) is tracked again from the newest keyframe's map points matched by ORB
   /// descriptor (PnP RANSAC, then active search around that pose); kept when it has more inliers.
   bool recover_from_keyframe = true;
+  /// ...and so is a frame whose share of inliers among the points found falls below this
+  /// fraction of its recent average (a pose from a wrong prior, points matched onto the wrong
+  /// texture; the share itself differs between cameras: ~0.95 on renders, 0.5-0.7 on real
+  /// images). 0: never.
+  double recover_on_inlier_share_drop = 0.6;
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
   int compress_idle_patches_after_frames = 100;
@@ -246,6 +251,9 @@ class Tracker {
   int mono16_bits_ = 0;
   int lost_in_row_ = 0;
   int tracked_at_keyframe_ = 0;  ///< Map points seen in the last keyframe (keyframe rule).
+  /// Moving average (weight 0.2) of the tracked frames' share of inliers among the points found
+  /// (recover_on_inlier_share_drop); 0 until a frame is tracked.
+  double inlier_share_average_ = 0.0;
   std::optional<geometry::Sim3> pending_loop_correction_;  ///< Reported with the next frame.
   std::uint64_t last_loop_version_ = 0;  ///< Map version of the last loop correction applied.
   struct PendingRelocalisation {
