@@ -98,7 +98,7 @@ TEST(NodeParams, LoopClosureNodeReadsTheLoopSections) {
   EXPECT_EQ(defaults.node.keyframe_queue_size, 100);
   EXPECT_TRUE(defaults.unknown.empty());
   EXPECT_NE(describe(defaults).find("loop_verification"), std::string::npos) << describe(defaults);
-  EXPECT_NE(describe(defaults).find("place_recognition: ORB 1000 features"), std::string::npos)
+  EXPECT_NE(describe(defaults).find("place_recognition: ORB 800 features"), std::string::npos)
       << describe(defaults);
 
   XmlRpcValue p = emptyStruct();
