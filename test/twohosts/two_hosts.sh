@@ -200,10 +200,12 @@ fi
 checker=(/usr/bin/python3 "$here/two_hosts_check.py" --out "$out" --outage "$outage")
 [[ -n "$figures" ]] && checker+=(--figures "$figures" --link-device "$dev_a"
   --mode "$([[ $one_host == true ]] && echo one_host || echo two_hosts)" --shaping "$describe")
-run_in "$ns_a" "$addr_a" "${checker[@]}"
-status=$?
+run_in "$ns_a" "$addr_a" "${checker[@]}" 2>&1 | tee "$out/check.log"
+status=${PIPESTATUS[0]}
 if [[ $status != 0 ]]; then
   log "FAILED ($status); node logs under $ROS_LOG_DIR, launch output in $out"
   tail -n 20 "$out/robot.log" "$out/base_station.log"
+  # The verdict again, last: a CI log that keeps only the end of the output still shows why.
+  grep -E '^(FAIL|two hosts)' "$out/check.log" | sed 's/^/[two_hosts verdict] /'
 fi
 exit "$status"
