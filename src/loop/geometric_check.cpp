@@ -14,6 +14,7 @@ namespace {
 
 /// Nearest and second-nearest candidate of query keypoint q among `pool`; appends the match
 /// when it passes the distance and ratio tests.
+SDS_HAMMING_LOOP
 void matchOne(const KeyframeAppearance& query, int q, const KeyframeAppearance& candidate,
               const std::vector<int>& pool, const GeometricCheckParams& params,
               std::vector<DescriptorMatch>& out) {

@@ -60,6 +60,7 @@ class Reader {
 
 }  // namespace
 
+SDS_HAMMING_LOOP
 WordId Vocabulary::word(const std::uint8_t* descriptor, NodeId* group, int group_levels_up) const {
   if (empty()) throw std::logic_error("vocabulary: empty (not trained or loaded)");
   const int group_level = std::max(0, depth_ - group_levels_up);
