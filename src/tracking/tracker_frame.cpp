@@ -7,6 +7,15 @@
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::tracking {
+namespace {
+
+/// The share of inliers among the points found (0 when none was found).
+double inlierShare(const FrameResult& result) {
+  const int found = std::max(result.num_found, result.num_inliers);
+  return found > 0 ? static_cast<double>(result.num_inliers) / found : 0.0;
+}
+
+}  // namespace
 
 void Tracker::track(double timestamp, const features::ImagePyramid& image, FrameResult* result) {
   common::Stopwatch stage;
@@ -37,11 +46,9 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   // average (a pose from a wrong prior, points matched onto the wrong texture: the share is
   // ~0.95 on renders, 0.5-0.7 on real images, and a wrong pose halves it): the frame is tried
   // again from the newest keyframe's points.
-  const double inlier_share =
-      result->num_found > 0 ? static_cast<double>(result->num_inliers) / result->num_found : 0.0;
   const bool share_dropped =
       inlier_share_average_ > 0.0 &&
-      inlier_share < params_.recover_on_inlier_share_drop * inlier_share_average_;
+      inlierShare(*result) < params_.recover_on_inlier_share_drop * inlier_share_average_;
   if (params_.recover_from_keyframe &&
       (result->num_inliers < params_.good_inliers || share_dropped)) {
     recoverFromKeyframe(image, corners, ids, search_points, &matches, &inliers, &T_cam_world,
@@ -79,10 +86,9 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   T_previous_world_ = T_cam_world;
   previous_measurements_ = inliers;
   last_scene_depth_ = sceneDepth(T_cam_world);
-  const double final_share =
-      static_cast<double>(result->num_inliers) / std::max(result->num_found, result->num_inliers);
+  const double share = inlierShare(*result);
   inlier_share_average_ =
-      inlier_share_average_ > 0.0 ? 0.8 * inlier_share_average_ + 0.2 * final_share : final_share;
+      inlier_share_average_ > 0.0 ? 0.8 * inlier_share_average_ + 0.2 * share : share;
   result->has_pose = true;
   result->T_cam_world = T_cam_world;
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
