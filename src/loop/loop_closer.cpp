@@ -219,8 +219,8 @@ map::RelocalisationAnswer LoopCloser::relocalise(const map::RelocalisationReques
   const std::vector<LoopCandidate> places = recognizer_.findPlaces(
       features, params_.relocalisation_candidates, params_.relocalisation_geometry);
   if (places.empty()) {
-    answer.reason = recognizer_.vocabularyReady() ? "no keyframe looks like this frame"
-                                                  : "the vocabulary is not learned yet";
+    answer.reason = recognizer_.size() == 0 ? "the map has no keyframe yet"
+                                            : "no keyframe looks like this frame";
     return answer;
   }
   VerificationView current;  // a frame: no map points of its own

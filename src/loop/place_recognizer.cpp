@@ -252,9 +252,11 @@ PlaceQueryResult PlaceRecognizer::query(map::KeyframeId id, double timestamp,
 std::vector<LoopCandidate> PlaceRecognizer::findPlaces(const KeyframeAppearance& appearance,
                                                        int max_candidates,
                                                        const GeometricCheckParams& geometry) const {
-  if (!vocabularyReady() || database_.size() == 0 || max_candidates < 1) return {};
+  if (max_candidates < 1) return {};
   appearance.validate();
   geometry.validate();
+  if (!vocabularyReady()) return findRecentPlaces(appearance, max_candidates, geometry);
+  if (database_.size() == 0) return {};
   FeatureGroups groups;
   const BowVector bow =
       vocabulary_->transform(appearance.descriptors, groups, params_.geometry.group_levels_up);
@@ -282,6 +284,30 @@ std::vector<LoopCandidate> PlaceRecognizer::findPlaces(const KeyframeAppearance&
   for (const Island& island : islands) {
     candidates.push_back(checkIsland(island, best, appearance, groups, geometry));
     if (candidates.back().geometry.passed) candidates.back().status = CandidateStatus::kAccepted;
+  }
+  return candidates;
+}
+
+std::vector<LoopCandidate> PlaceRecognizer::findRecentPlaces(
+    const KeyframeAppearance& appearance, int max_candidates,
+    const GeometricCheckParams& geometry) const {
+  // A young map (no vocabulary yet) has few keyframes, and a camera lost in it is most likely
+  // near its newest ones: they are matched by brute force, newest first.
+  std::vector<LoopCandidate> candidates;
+  for (auto it = keyframes_.rbegin();
+       it != keyframes_.rend() && static_cast<int>(candidates.size()) < max_candidates; ++it) {
+    if (it->forgotten) continue;
+    LoopCandidate candidate;
+    candidate.keyframe_id = candidate.island_first_id = candidate.island_last_id = it->id;
+    const std::vector<DescriptorMatch> matches =
+        matchDescriptors(appearance, it->appearance, geometry);
+    candidate.geometry = checkGeometry(appearance, it->appearance, matches, geometry);
+    if (candidate.geometry.passed) {
+      candidate.status = CandidateStatus::kAccepted;
+    } else {
+      candidate.reason = candidate.geometry.reason;
+    }
+    candidates.push_back(std::move(candidate));
   }
   return candidates;
 }

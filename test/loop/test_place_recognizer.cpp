@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 
 #include "scale_drift_slam/loop/place_recognizer.h"
@@ -290,6 +291,36 @@ TEST(PlaceRecognizer, OnlineVocabularyIsLearnedAfterTheFirstKeyframes) {
   EXPECT_EQ(recognizer.appearance(3).size(), walk.appearances[3].size());
   EXPECT_THROW(recognizer.add(3, 9.0, walk.appearances[3]), std::invalid_argument);
   EXPECT_THROW(recognizer.appearance(99), std::out_of_range);
+}
+
+TEST(PlaceRecognizer, BeforeTheVocabularyRelocalisationMatchesTheNewestKeyframes) {
+  // A young map (no vocabulary yet): a lost camera back on wall 0 between keyframes 4 and 5 is
+  // matched against the newest keyframes by brute force; a view of another wall passes none.
+  const Walk& walk = revisitWalk();
+  PlaceRecognizer recognizer{PlaceRecognitionParams{}};
+  for (map::KeyframeId i = 0; i < 8; ++i)
+    recognizer.add(i, 0.5 * i, walk.appearances[i]);
+  recognizer.forget(6);
+  ASSERT_FALSE(recognizer.vocabularyReady());
+  const std::vector<LoopCandidate> places =
+      recognizer.findPlaces(walk.appearances[walk.first_revisit + 4], 4, GeometricCheckParams{});
+  std::vector<map::KeyframeId> proposed, passed;
+  for (const LoopCandidate& c : places) {
+    proposed.push_back(c.keyframe_id);
+    if (c.geometry.passed) passed.push_back(c.keyframe_id);
+    EXPECT_EQ(c.geometry.passed, c.status == CandidateStatus::kAccepted);
+  }
+  EXPECT_EQ(proposed, (std::vector<map::KeyframeId>{7, 5, 4, 3}));
+  // The two keyframes nearest the view (60 px on either side of it) pass.
+  EXPECT_NE(std::find(passed.begin(), passed.end(), 4), passed.end());
+  EXPECT_NE(std::find(passed.begin(), passed.end(), 5), passed.end());
+  for (const LoopCandidate& c :
+       recognizer.findPlaces(walk.appearances[40], 4, GeometricCheckParams{})) {
+    EXPECT_FALSE(c.geometry.passed) << c.keyframe_id;
+  }
+  EXPECT_TRUE(PlaceRecognizer{PlaceRecognitionParams{}}
+                  .findPlaces(walk.appearances[0], 4, GeometricCheckParams{})
+                  .empty());
 }
 
 TEST(PlaceRecognizer, AVocabularyFileIsUsedFromTheFirstKeyframe) {

@@ -104,8 +104,9 @@ class PlaceRecognizer {
   /// For relocalisation: the keyframes among all added so far that look most like `appearance`
   /// (scoring at least min_normalized_score of the best), best first, at most `max_candidates`,
   /// each checked with `geometry` (see LoopCandidate::geometry). No keyframe is
-  /// excluded and the consistency bookkeeping of query() is untouched. Empty until the vocabulary
-  /// is ready.
+  /// excluded and the consistency bookkeeping of query() is untouched. Before the vocabulary is
+  /// learned (a young map): the newest `max_candidates` keyframes, newest first, their
+  /// descriptors matched by brute force (scores 0).
   std::vector<LoopCandidate> findPlaces(const KeyframeAppearance& appearance, int max_candidates,
                                         const GeometricCheckParams& geometry) const;
 
@@ -147,6 +148,10 @@ class PlaceRecognizer {
     FeatureGroups groups;
     bool forgotten = false;
   };
+  /// findPlaces() before the vocabulary is learned.
+  std::vector<LoopCandidate> findRecentPlaces(const KeyframeAppearance& appearance,
+                                              int max_candidates,
+                                              const GeometricCheckParams& geometry) const;
   struct Island {
     std::size_t first = 0;
     std::size_t last = 0;
