@@ -228,7 +228,7 @@ class BadInput(unittest.TestCase):
                                         'tracker session 999', level=Log.WARN))
 
         # Relocalisation requests: without an image (refused at once), then one the loop closer
-        # cannot place yet (two keyframes, no vocabulary): both answered with the reason.
+        # cannot place (no keyframe with a usable image): both answered with the reason.
         request = RelocalisationRequest()
         request.session, request.frame_index = session, 7
         request_pub.publish(request)
@@ -241,7 +241,7 @@ class BadInput(unittest.TestCase):
         request_pub.publish(request)
         self.assertTrue(sds.wait_until(lambda: len(answers) >= 2, 10))
         self.assertEqual((answers[1].frame_index, answers[1].success), (8, False))
-        self.assertIn('vocabulary', answers[1].reason)
+        self.assertIn('keyframe', answers[1].reason)
         self.assertTrue(rosout.wait_for('loop_closure_node', 'keyframe 1',
                                         'its image is unusable', level=Log.WARN))
         self.assertAlive('/tracking_node', '/mapping_node', '/loop_closure_node')
