@@ -53,6 +53,8 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "restart_below_keyframes", &t.restart_below_keyframes},
       {"tracker", "recover_from_keyframe", &t.recover_from_keyframe},
       {"tracker", "recover_on_inlier_share_drop", &t.recover_on_inlier_share_drop},
+      {"tracker", "recovery_max_descriptor_distance", &t.recovery_max_descriptor_distance},
+      {"tracker", "recovery_max_ratio", &t.recovery_max_ratio},
       {"tracker", "compress_idle_patches_after_frames", &t.compress_idle_patches_after_frames},
       {"features", "fast_threshold", &t.features.fast_threshold},
       {"features", "min_fast_threshold", &t.features.min_fast_threshold},

@@ -31,6 +31,12 @@ void TrackerParams::validate() const {
   if (good_inliers < min_inliers) {
     throw std::invalid_argument("tracker.good_inliers must be >= tracker.min_inliers");
   }
+  if (recovery_max_descriptor_distance < 0 || recovery_max_descriptor_distance > 256) {
+    throw std::invalid_argument("tracker.recovery_max_descriptor_distance must be in [0, 256]");
+  }
+  if (!(recovery_max_ratio > 0.0 && recovery_max_ratio <= 1.0)) {
+    throw std::invalid_argument("tracker.recovery_max_ratio must be in (0, 1]");
+  }
   if (!(recover_on_inlier_share_drop >= 0.0 && recover_on_inlier_share_drop <= 1.0)) {
     throw std::invalid_argument("tracker.recover_on_inlier_share_drop must be in [0, 1]");
   }

@@ -16,6 +16,7 @@ constexpr int kRecoveryCorners = 1000;  ///< Corners of the frame described for 
 void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
                                      const features::ImagePyramid& image) {
   keyframe_points_ = {};
+  keyframe_points_.frame_index = frame_index_;
   if (!params_.recover_from_keyframe) return;
   keyframe_points_.image = image.base();  // shared, not copied
   for (const map::Observation& o : message.keyframe.observations) {
@@ -31,34 +32,47 @@ void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
 void Tracker::describeKeyframePoints() {
   if (keyframe_points_.described) return;
   keyframe_points_.described = true;
-  std::vector<cv::KeyPoint> corners = std::move(keyframe_points_.corners);
-  keyframe_points_.descriptors = describeCorners(keyframe_points_.image, &corners);
-  std::vector<map::PointId> ids;
-  for (const cv::KeyPoint& corner : corners)
-    ids.push_back(keyframe_points_.ids[corner.class_id]);
-  keyframe_points_.ids = std::move(ids);
-  keyframe_points_.image.release();
+  describePoints(&keyframe_points_);
 }
 
-std::optional<geometry::SE3> Tracker::poseFromKeyframePoints(const features::ImagePyramid& image,
-                                                             const features::CornerGrid& corners) {
+void Tracker::describePoints(DescribedPoints* points) {
+  std::vector<cv::KeyPoint> corners = std::move(points->corners);
+  points->descriptors = describeCorners(points->image, &corners);
+  std::vector<map::PointId> ids;
+  for (const cv::KeyPoint& corner : corners)
+    ids.push_back(points->ids[corner.class_id]);
+  points->ids = std::move(ids);
+  points->image.release();
+}
+
+Tracker::DescribedPoints Tracker::previousFramePoints() const {
+  DescribedPoints points;
+  points.image = previous_image_.base();
+  for (const Measurement& m : previous_measurements_) {
+    cv::KeyPoint corner(static_cast<float>(m.px.x()), static_cast<float>(m.px.y()), 31.0f);
+    corner.class_id = static_cast<int>(points.ids.size());
+    points.corners.push_back(corner);
+    points.ids.push_back(m.id);
+  }
+  describePoints(&points);
+  return points;
+}
+
+std::optional<geometry::SE3> Tracker::poseFromDescribedPoints(const DescribedPoints& points,
+                                                              const FrameCorners& frame) {
   const int min_matches = params_.min_inliers;
-  describeKeyframePoints();
-  if (static_cast<int>(keyframe_points_.ids.size()) < min_matches) return std::nullopt;
-  std::vector<cv::KeyPoint> keypoints = features::distributeQuadtree(
-      corners.corners(), kRecoveryCorners, camera_->width(), camera_->height());
-  const cv::Mat descriptors = describeCorners(image.base(), &keypoints);
-  const std::vector<int> match = matchDescriptors(keyframe_points_.descriptors, descriptors,
-                                                  params_.triangulation.max_descriptor_distance,
-                                                  params_.triangulation.max_ratio);
+  if (static_cast<int>(points.ids.size()) < min_matches) return std::nullopt;
+  const std::vector<int> match =
+      matchDescriptors(points.descriptors, frame.descriptors,
+                       params_.recovery_max_descriptor_distance, params_.recovery_max_ratio);
   features::MotionOnlyInput input;
   input.focal_length_px = focal_;
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> normalised;
   for (std::size_t i = 0; i < match.size(); ++i) {
-    if (match[i] < 0 || !map_.hasPoint(keyframe_points_.ids[i])) continue;
-    const Eigen::Vector3d& p = map_.point(keyframe_points_.ids[i]).p_world;
-    const cv::Point2f& px = keypoints[match[i]].pt;
+    if (match[i] < 0 || !map_.hasPoint(points.ids[i])) continue;
+    const Eigen::Vector3d& p = map_.point(points.ids[i]).p_world;
+    const cv::Point2f& px = frame.keypoints[match[i]].pt;
     const Eigen::Vector2d xy = camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y));
     object.emplace_back(p.x(), p.y(), p.z());
     normalised.emplace_back(xy.x(), xy.y());
@@ -98,8 +112,35 @@ void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,
                                   std::vector<features::SearchMatch>* matches,
                                   std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                                   FrameResult* result) {
-  const std::optional<geometry::SE3> T_pnp = poseFromKeyframePoints(image, corners);
-  if (!T_pnp) return;
+  // The newest keyframe's points; then the previous frame's inliers, a newer view of the map
+  // when it is not that keyframe (at a low frame rate the view changes a lot per frame).
+  describeKeyframePoints();
+  const auto enough = [this](std::size_t n) { return static_cast<int>(n) >= params_.min_inliers; };
+  const bool from_previous = enough(previous_measurements_.size()) &&
+                             !previous_image_.levels.empty() &&
+                             keyframe_points_.frame_index + 1 != frame_index_;
+  if (!enough(keyframe_points_.ids.size()) && !from_previous) return;
+  FrameCorners frame;
+  frame.keypoints = features::distributeQuadtree(corners.corners(), kRecoveryCorners,
+                                                 camera_->width(), camera_->height());
+  frame.descriptors = describeCorners(image.base(), &frame.keypoints);
+  const bool recovered =
+      tryPoseFrom(poseFromDescribedPoints(keyframe_points_, frame), image, corners, ids,
+                  search_points, matches, inliers, T_solved, result);
+  if (!recovered && from_previous) {
+    tryPoseFrom(poseFromDescribedPoints(previousFramePoints(), frame), image, corners, ids,
+                search_points, matches, inliers, T_solved, result);
+  }
+}
+
+bool Tracker::tryPoseFrom(const std::optional<geometry::SE3>& T_pnp,
+                          const features::ImagePyramid& image, const features::CornerGrid& corners,
+                          const std::vector<map::PointId>& ids,
+                          const std::vector<features::SearchPoint>& search_points,
+                          std::vector<features::SearchMatch>* matches,
+                          std::vector<Measurement>* inliers, geometry::SE3* T_solved,
+                          FrameResult* result) {
+  if (!T_pnp) return false;
   // Around the PnP pose: a few times the prior's floor (the pose rests on a few dozen matches).
   const double depth = last_scene_depth_ > 0.0 ? last_scene_depth_ : 1.0;
   const double k = 3.0;
@@ -112,13 +153,14 @@ void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,
   std::vector<Measurement> more_inliers;
   FrameResult counts;
   const geometry::SE3 T = solvePose(*T_pnp, ids, found, &more_inliers, &counts);
-  if (counts.num_inliers <= result->num_inliers) return;
+  if (counts.num_inliers <= result->num_inliers) return false;
   *matches = std::move(found);
   *T_solved = T;
   *inliers = std::move(more_inliers);
   result->num_found = counts.num_found;
   result->num_inliers = counts.num_inliers;
   result->pose_information = counts.pose_information;
+  return true;
 }
 
 }  // namespace scale_drift_slam::tracking

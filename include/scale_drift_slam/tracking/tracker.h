@@ -57,8 +57,14 @@ struct TrackerParams {
   int restart_below_keyframes = 30;
   /// A frame tracked with fewer than good_inliers (the flow could not carry it: a wide baseline
   /// between frames) is tracked again from the newest keyframe's map points matched by ORB
-  /// descriptor (PnP RANSAC, then active search around that pose); kept when it has more inliers.
+  /// descriptor (PnP RANSAC, then active search around that pose), else from the previous
+  /// frame's inliers; kept when it has more inliers.
   bool recover_from_keyframe = true;
+  /// The recovery's descriptor matching: largest Hamming distance (of 256 bits) and best /
+  /// second-best distance ratio. Looser than the triangulation's: PnP RANSAC rejects the wrong
+  /// matches, and views a second apart keep too few matches under the stricter test.
+  int recovery_max_descriptor_distance = 80;
+  double recovery_max_ratio = 0.9;
   /// ...and so is a frame whose share of inliers among the points found falls below this
   /// fraction of its recent average (a pose from a wrong prior, points matched onto the wrong
   /// texture; the share itself differs between cameras: ~0.95 on renders, 0.5-0.7 on real
@@ -183,17 +189,36 @@ class Tracker {
                               const features::ImagePyramid& image);
   /// ...described (ORB) the first time a frame needs them (most keyframes never do).
   void describeKeyframePoints();
-  /// The pose from the newest keyframe's points matched by descriptor in this frame (PnP RANSAC,
-  /// refined by the motion-only BA); nothing when too few match.
-  std::optional<geometry::SE3> poseFromKeyframePoints(const features::ImagePyramid& image,
-                                                      const features::CornerGrid& corners);
-  /// Active search around that pose; keeps the new matches and pose when they give more inliers.
+  struct DescribedPoints;
+  /// ORB descriptors of the points' corners, from their image (released then); corners whose
+  /// patch leaves the image are dropped with their ids.
+  static void describePoints(DescribedPoints* points);
+  /// The previous frame's inliers, described in its image.
+  DescribedPoints previousFramePoints() const;
+  /// Corners of the frame being recovered, described once for every attempt.
+  struct FrameCorners {
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+  };
+  /// The pose from `points` matched by descriptor in the frame (PnP RANSAC, refined by the
+  /// motion-only BA); nothing when too few match.
+  std::optional<geometry::SE3> poseFromDescribedPoints(const DescribedPoints& points,
+                                                       const FrameCorners& frame);
+  /// Recovery of a frame the prior failed: a pose from the newest keyframe's points, else from
+  /// the previous frame's inliers (tryPoseFrom each).
   void recoverFromKeyframe(const features::ImagePyramid& image, const features::CornerGrid& corners,
                            const std::vector<map::PointId>& ids,
                            const std::vector<features::SearchPoint>& search_points,
                            std::vector<features::SearchMatch>* matches,
                            std::vector<Measurement>* inliers, geometry::SE3* T_solved,
                            FrameResult* result);
+  /// Active search around a recovered pose; keeps the new matches and pose (true) when they give
+  /// more inliers than the frame has.
+  bool tryPoseFrom(const std::optional<geometry::SE3>& T_pnp, const features::ImagePyramid& image,
+                   const features::CornerGrid& corners, const std::vector<map::PointId>& ids,
+                   const std::vector<features::SearchPoint>& search_points,
+                   std::vector<features::SearchMatch>* matches, std::vector<Measurement>* inliers,
+                   geometry::SE3* T_solved, FrameResult* result);
   void recordSearches(const std::vector<map::PointId>& ids,
                       const std::vector<features::SearchMatch>& matches, FrameResult* result);
   /// Motion-only BA on the found matches from `T_guess`; fills the inliers and the found and
@@ -228,14 +253,15 @@ class Tracker {
   MotionPriorEstimator motion_prior_;
   FeatureCandidates candidates_;
   KeyframeTriangulation triangulation_;
-  struct KeyframePoints {  ///< The newest keyframe's map points and their ORB descriptors.
+  struct DescribedPoints {          ///< Map points seen in one image and their ORB descriptors.
+    std::uint64_t frame_index = 0;  ///< Of the image.
     std::vector<map::PointId> ids;
     std::vector<cv::KeyPoint> corners;  ///< Their measured pixels, until described.
     cv::Mat image;                      ///< The keyframe's image, until described.
     bool described = false;
     cv::Mat descriptors;
   };
-  KeyframePoints keyframe_points_;
+  DescribedPoints keyframe_points_;  ///< The newest keyframe's.
   TrackingMap map_;
   TrackingState state_ = TrackingState::kInitializing;
 
