@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   };
   std::vector<Variant> variants;
   for (const auto& [window, levels] :
-       {std::pair{21, 4}, std::pair{15, 4}, std::pair{15, 3}, std::pair{11, 3}}) {
+       {std::pair{21, 4}, std::pair{15, 4}, std::pair{15, 3}, std::pair{11, 4}, std::pair{11, 3}}) {
     tracking::OpticalFlowParams p;
     p.window = window;
     p.pyramid_levels = levels;
