@@ -155,6 +155,53 @@ TEST(Relocalisation, ARequestEndsWhenTrackingRecoversByItself) {
   EXPECT_FALSE(tracker.applyRelocalisation(stale));
 }
 
+// The tracker's recovery from the previous frame: the camera rolls 30 degrees in place after the
+// last keyframe (no keyframe: it has not moved), then jumps 1.5 m sideways (frames dropped: ~145 px
+// of image motion the flow and the search around it cannot carry). The newest keyframe's upright
+// descriptors, 30 degrees away, match too few of the frame's corners; the previous frame's inliers,
+// described in the rolled view, give the pose at once.
+TEST(Relocalisation, AJumpAfterTheViewRolledAwayFromTheNewestKeyframeRecoversFromThePreviousFrame) {
+  const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
+  const auto cam = camera();
+  tracking::Tracker tracker(cam, tracking::TrackerParams{});
+  std::vector<Eigen::Vector3d> estimate, truth;
+  const auto process = [&](double t, const geometry::SE3& T_world_cam) {
+    const cv::Mat image =
+        test::renderPlanes(room, cam->K(), T_world_cam.inverse(), kWidth, kHeight);
+    const tracking::FrameResult r = tracker.processFrame(t, image, features::PixelEncoding::kMono8);
+    if (r.has_pose) {
+      estimate.push_back(r.T_cam_world.inverseTranslation());
+      truth.push_back(T_world_cam.translation());
+    }
+    return r;
+  };
+  for (int k = 0; k < 30; ++k)
+    process(0.1 * k, cameraPose(k));
+  ASSERT_EQ(tracker.state(), tracking::TrackingState::kGood);
+  const std::size_t keyframes = tracker.trackingMap().numKeyframes();
+  const auto rolled = [](double degrees, const Eigen::Vector3d& shift) {
+    return geometry::SE3(Eigen::Matrix3d::Identity(), shift) * cameraPose(29) *
+           geometry::SE3(geometry::expSO3(Eigen::Vector3d(0.0, 0.0, degrees * M_PI / 180.0)),
+                         Eigen::Vector3d::Zero());
+  };
+  for (int j = 1; j <= 20; ++j) {
+    const tracking::FrameResult r =
+        process(3.0 + 0.1 * j, rolled(1.5 * j, Eigen::Vector3d::Zero()));
+    ASSERT_TRUE(r.has_pose) << "roll frame " << j << ": " << r.message;
+  }
+  ASSERT_EQ(tracker.trackingMap().numKeyframes(), keyframes) << "a keyframe in the roll";
+  const geometry::SE3 jumped = rolled(30.0, Eigen::Vector3d(1.5, 0.0, 0.0));
+  const tracking::FrameResult r = process(5.1, jumped);
+  ASSERT_TRUE(r.has_pose) << "the jump: " << r.message;
+  EXPECT_EQ(r.state, tracking::TrackingState::kGood) << r.message;
+  // The pose against the truth, in the frame of the map (aligned over all the posed frames).
+  const geometry::Sim3 S_truth_map = evaluation::alignSim3(estimate, truth);
+  const double error =
+      (S_truth_map * r.T_cam_world.inverseTranslation() - jumped.translation()).norm();
+  std::printf("after the jump: %d inliers, position error %.4f m\n", r.num_inliers, error);
+  EXPECT_LT(error, 0.03);
+}
+
 // Lost in a map too young to relocalise in (no vocabulary yet): after restart_after_lost_frames
 // lost frames the tracker discards it and initialises again; the mapper and the loop closer follow,
 // and the new map is built from the new keyframes only.
