@@ -84,6 +84,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"flow", "max_forward_backward_px", &t.motion_prior.flow.max_forward_backward_px},
       {"flow", "dis_preset", &t.motion_prior.flow.dis_preset},
       {"flow", "photometric_radius", &t.motion_prior.flow.photometric_radius},
+      {"flow", "shift_retry_px", &t.motion_prior.flow.shift_retry_px},
       {"motion_prior", "flow_sigma_px", &t.motion_prior.flow_sigma_px},
       {"motion_prior", "predict_flow", &t.motion_prior.predict_flow},
       {"motion_prior", "candidate_max_forward_backward_px",

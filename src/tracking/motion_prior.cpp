@@ -98,12 +98,35 @@ MotionPrior MotionPriorEstimator::estimate(
   from.insert(from.end(), extra_px.begin(), extra_px.end());
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
+  std::vector<cv::Point2f> start = from;
   if (params_.predict_flow) {
-    const std::vector<cv::Point2f> start =
-        predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera);
+    start = predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera);
     flow_.track(previous, current, from, &to, &ok, &start);
   } else {
     flow_.track(previous, current, from, &to, &ok);
+  }
+  MotionPrior prior = priorFromTracks(picked, to, ok, T_guess, scene_depth, camera);
+  // A weak prior (fewer inliers than half the seeds' tracks, or none) and the image's shift far
+  // from where the flow started: the motion was not the expected one (a jerk, a low frame rate).
+  // The points again from the shift; the pose with more inliers wins.
+  const long seed_tracks = std::count(ok.begin(), ok.begin() + picked.size(), 1);
+  const bool weak = !prior.from_flow || 2 * prior.num_tracks < seed_tracks;
+  const cv::Point2d shift = weak ? shiftAwayFrom(previous, current, from, start) : cv::Point2d();
+  if (shift != cv::Point2d(0.0, 0.0)) {
+    std::vector<cv::Point2f> shifted(from.size());
+    const cv::Point2f by(static_cast<float>(shift.x), static_cast<float>(shift.y));
+    for (std::size_t i = 0; i < from.size(); ++i)
+      shifted[i] = from[i] + by;
+    std::vector<cv::Point2f> shifted_to;
+    std::vector<unsigned char> shifted_ok;
+    flow_.track(previous, current, from, &shifted_to, &shifted_ok, &shifted);
+    const MotionPrior from_shift =
+        priorFromTracks(picked, shifted_to, shifted_ok, T_guess, scene_depth, camera);
+    if (from_shift.num_tracks > prior.num_tracks) {
+      prior = from_shift;
+      to = std::move(shifted_to);
+      ok = std::move(shifted_ok);
+    }
   }
   extra_tracked->assign(to.begin() + picked.size(), to.end());
   extra_ok->assign(ok.begin() + picked.size(), ok.end());
@@ -113,7 +136,36 @@ MotionPrior MotionPriorEstimator::estimate(
     flow_.checkBackward(previous, current, extra_px, *extra_tracked, extra_ok,
                         params_.candidate_max_forward_backward_px);
   }
+  return prior;
+}
 
+cv::Point2d MotionPriorEstimator::shiftAwayFrom(const features::ImagePyramid& previous,
+                                                const features::ImagePyramid& current,
+                                                const std::vector<cv::Point2f>& from,
+                                                const std::vector<cv::Point2f>& start) {
+  if (params_.flow.shift_retry_px <= 0.0 || params_.flow.method != FlowMethod::kLucasKanade ||
+      from.empty()) {
+    return {0.0, 0.0};
+  }
+  std::vector<float> dx, dy;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    dx.push_back(start[i].x - from[i].x);
+    dy.push_back(start[i].y - from[i].y);
+  }
+  std::nth_element(dx.begin(), dx.begin() + dx.size() / 2, dx.end());
+  std::nth_element(dy.begin(), dy.begin() + dy.size() / 2, dy.end());
+  const cv::Point2d started(dx[dx.size() / 2], dy[dy.size() / 2]);
+  const cv::Point2d shift = imageShift(previous, current, &shift_window_);
+  const cv::Point2d off = shift - started;
+  const double far = params_.flow.shift_retry_px;
+  return off.dot(off) > far * far ? shift : cv::Point2d(0.0, 0.0);
+}
+
+MotionPrior MotionPriorEstimator::priorFromTracks(const std::vector<FlowSeed>& picked,
+                                                  const std::vector<cv::Point2f>& to,
+                                                  const std::vector<unsigned char>& ok,
+                                                  const geometry::SE3& T_guess, double scene_depth,
+                                                  const geometry::CameraModel& camera) const {
   features::MotionOnlyInput input;
   input.T_cam_world_guess = T_guess;
   input.focal_length_px = camera.calibration().meanFocalLength();

@@ -1,6 +1,9 @@
 #include "scale_drift_slam/tracking/optical_flow.h"
 
+#include <algorithm>
 #include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
 
 namespace scale_drift_slam::tracking {
 
@@ -31,6 +34,24 @@ void OpticalFlowParams::validate() const {
     throw std::invalid_argument("flow.dis_preset must be 0, 1 or 2");
   if (photometric_radius < 0 || photometric_radius > 50)
     throw std::invalid_argument("flow.photometric_radius must be in [0, 50]");
+  if (!(shift_retry_px >= 0.0)) throw std::invalid_argument("flow.shift_retry_px must be >= 0");
+}
+
+cv::Point2d imageShift(const features::ImagePyramid& previous,
+                       const features::ImagePyramid& current, cv::Mat* window) {
+  // The finest level at most 160 px wide (VGA: 80x60, KITTI: 153x46, 240x180: 120x90): ~0.2 ms
+  // a frame, past the parallax, and within a few pixels, well inside Lucas-Kanade's reach.
+  const int levels = std::min(previous.numLevels(), current.numLevels());
+  if (levels == 0 || previous.base().size() != current.base().size()) return {0.0, 0.0};
+  int level = 0;
+  while (level + 1 < levels && previous.levels[level].cols > 160)
+    ++level;
+  cv::Mat a, b;
+  previous.levels[level].convertTo(a, CV_32F);
+  current.levels[level].convertTo(b, CV_32F);
+  if (window->size() != a.size()) cv::createHanningWindow(*window, a.size(), CV_32F);
+  const double scale = static_cast<double>(previous.base().cols) / a.cols;
+  return cv::phaseCorrelate(a, b, *window) * scale;
 }
 
 OpticalFlow::OpticalFlow(const OpticalFlowParams& params) : params_(params) {

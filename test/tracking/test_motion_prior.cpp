@@ -73,9 +73,16 @@ geometry::SE3 panPose(int k, double deg) {
                        Eigen::Vector3d(0.02 * k, 0.0, -0.5));
 }
 
-/// The prior for frame 2 of the pan from frame 1, with the constant-velocity guess.
+/// How panPrior guesses and flows.
+struct PanFlow {
+  bool predict_flow = true;      ///< MotionPriorParams::predict_flow
+  double shift_retry_px = 20.0;  ///< OpticalFlowParams::shift_retry_px
+  bool guess_still = false;      ///< guess no motion (a jerk), not constant velocity
+};
+
+/// The prior for frame 2 of the pan from frame 1, with the constant-velocity guess (or none).
 /// `candidate_error_px`, when given: the distance of each candidate's track from its true pixel.
-MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* candidate_ok,
+MotionPrior panPrior(double deg, const PanFlow& how, std::vector<unsigned char>* candidate_ok,
                      std::vector<double>* candidate_error_px = nullptr) {
   const auto room = test::boxRoom(4.0, 2.0, 4.0, 40);
   const auto camera = test::pinholeCamera(450.0);
@@ -107,10 +114,12 @@ MotionPrior panPrior(double deg, bool predict_flow, std::vector<unsigned char>* 
     }
   }
   MotionPriorParams params;
-  params.predict_flow = predict_flow;
+  params.predict_flow = how.predict_flow;
+  params.flow.shift_retry_px = how.shift_retry_px;
   MotionPriorEstimator estimator(params, features::MotionOnlyBundleAdjustmentParams{});
   const geometry::SE3 T_previous = panPose(1, deg).inverse();
-  const geometry::SE3 T_guess = T_previous * panPose(0, deg) * T_previous;  // constant velocity
+  const geometry::SE3 T_guess =
+      how.guess_still ? T_previous : T_previous * panPose(0, deg) * T_previous;
   std::vector<cv::Point2f> candidate_px;
   const MotionPrior prior =
       estimator.estimate(previous, current, seeds, candidates, T_guess, T_previous, 2.0, *camera,
@@ -132,8 +141,9 @@ TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
   const double deg = 10.0;
   std::vector<unsigned char> predicted_ok, plain_ok;
   std::vector<double> error_px;
-  const MotionPrior predicted = panPrior(deg, true, &predicted_ok, &error_px);
-  const MotionPrior plain = panPrior(deg, false, &plain_ok);
+  const MotionPrior predicted = panPrior(deg, {}, &predicted_ok, &error_px);
+  // From the points themselves, without the image's shift either (next test).
+  const MotionPrior plain = panPrior(deg, {false, 0.0}, &plain_ok);
   const geometry::SE3 T_true = panPose(2, deg).inverse();
   ASSERT_TRUE(predicted.from_flow);
   EXPECT_GT(predicted.num_tracks, 100);
@@ -155,6 +165,38 @@ TEST(MotionPrior, AFastSteadyPanIsFollowedWhenTheFlowStartsAtThePrediction) {
       predicted.num_tracks, count(predicted_ok), predicted_ok.size(), plain.num_tracks,
       plain.from_flow ? "flow" : "fallback", count(plain_ok));
   EXPECT_LT(plain.num_tracks, predicted.num_tracks / 2);
+}
+
+TEST(MotionPrior, AJerkNobodyPredictedIsFollowedFromTheImageShift) {
+  // The camera was still and turns 10 degrees in one frame (a jerk of the hand, or frames at
+  // 1 Hz): the guess is no motion and the flow starts at the points, ~80 px from where they went.
+  // The whole image's shift (phase correlation at a coarse level) puts them back within reach.
+  const double deg = 10.0;
+  std::vector<unsigned char> shifted_ok, unshifted_ok;
+  const MotionPrior shifted = panPrior(deg, {true, 20.0, true}, &shifted_ok);
+  const MotionPrior unshifted = panPrior(deg, {true, 0.0, true}, &unshifted_ok);
+  const geometry::SE3 T_true = panPose(2, deg).inverse();
+  std::printf("from the image shift: %d tracks; without it: %d tracks (%s)\n", shifted.num_tracks,
+              unshifted.num_tracks, unshifted.from_flow ? "flow" : "fallback");
+  ASSERT_TRUE(shifted.from_flow);
+  EXPECT_GT(shifted.num_tracks, 100);
+  EXPECT_LT((shifted.T_cur_world * T_true.inverse()).log().head<3>().norm(), 0.003);
+  EXPECT_LT(unshifted.num_tracks, shifted.num_tracks / 2);
+}
+
+TEST(MotionPrior, TheImageShiftIsMeasuredAtACoarseLevel) {
+  const cv::Mat texture = test::texturedImage(800, 600, 7);
+  const cv::Rect previous_view(60, 50, 640, 480);
+  const features::ImagePyramid previous = features::buildPyramid(texture(previous_view), 4, 15);
+  cv::Mat window;
+  for (const cv::Point shift : {cv::Point(37, -12), cv::Point(-90, 25), cv::Point(0, 0)}) {
+    // The scene moves by `shift` in the image: the view moves the other way.
+    const features::ImagePyramid current =
+        features::buildPyramid(texture(previous_view - shift), 4, 15);
+    const cv::Point2d measured = imageShift(previous, current, &window);
+    EXPECT_NEAR(measured.x, shift.x, 1.5) << shift;
+    EXPECT_NEAR(measured.y, shift.y, 1.5) << shift;
+  }
 }
 
 }  // namespace

@@ -62,7 +62,10 @@ class MotionPriorEstimator {
   /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
   /// `extra_tracked` / `extra_ok`) from `previous` into `current` in one flow call and estimates
   /// the prior. `T_guess` is the constant-velocity guess of the current pose, `T_previous` the
-  /// previous frame's pose; `scene_depth` scales the floors.
+  /// previous frame's pose; `scene_depth` scales the floors. When the pose from the flow is weak
+  /// (inliers fewer than half the seeds' tracks) and the image's shift is far from the flow's
+  /// start (flow.shift_retry_px), the points are tracked again from the shift and the set of
+  /// tracks whose pose has more inliers is kept.
   MotionPrior estimate(const features::ImagePyramid& previous,
                        const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
                        const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
@@ -89,9 +92,23 @@ class MotionPriorEstimator {
                                const geometry::CameraModel& camera);
 
  private:
+  /// The pose from the seeds' tracks (`to`, `ok`: the first picked.size() entries), or the
+  /// fallback when too few tracks or inliers.
+  MotionPrior priorFromTracks(const std::vector<FlowSeed>& picked,
+                              const std::vector<cv::Point2f>& to,
+                              const std::vector<unsigned char>& ok, const geometry::SE3& T_guess,
+                              double scene_depth, const geometry::CameraModel& camera) const;
+  /// The image's shift (imageShift) when it is more than flow.shift_retry_px from the median
+  /// displacement the flow started from (`start` - `from`); (0, 0) otherwise.
+  cv::Point2d shiftAwayFrom(const features::ImagePyramid& previous,
+                            const features::ImagePyramid& current,
+                            const std::vector<cv::Point2f>& from,
+                            const std::vector<cv::Point2f>& start);
+
   MotionPriorParams params_;
   features::MotionOnlyBundleAdjustmentParams motion_ba_;
   OpticalFlow flow_;
+  cv::Mat shift_window_;  ///< The phase correlation's Hanning window, reused between frames.
 };
 
 }  // namespace scale_drift_slam::tracking

@@ -38,8 +38,20 @@ struct OpticalFlowParams {
   /// Lucas-Kanade follows points in the photometrically normalised image
   /// (features::normalisePhotometry) with this box radius (pixels); 0: in the image itself.
   int photometric_radius = 0;
+  /// When its pose is weak, the motion prior measures the whole image's shift (imageShift); when
+  /// that differs from where the flow started (the median predicted displacement) by more than
+  /// this (pixels), the points are tracked again from their positions moved by the shift, and the
+  /// prior keeps whichever set of tracks gives the pose with more inliers: a jerk of the hand or
+  /// a low frame rate moves the image further than Lucas-Kanade's pyramid reaches from where the
+  /// motion was expected, and a start out of reach can converge onto the wrong texture (0: never).
+  double shift_retry_px = 20.0;
   void validate() const;
 };
+
+/// The whole image's translation from `previous` to `current` in pixels of level 0: phase
+/// correlation at the finest level at most 160 px wide (`window` caches its Hanning window).
+cv::Point2d imageShift(const features::ImagePyramid& previous,
+                       const features::ImagePyramid& current, cv::Mat* window);
 
 class OpticalFlow {
  public:
