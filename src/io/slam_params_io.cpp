@@ -55,6 +55,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "recover_on_inlier_share_drop", &t.recover_on_inlier_share_drop},
       {"tracker", "recovery_max_descriptor_distance", &t.recovery_max_descriptor_distance},
       {"tracker", "recovery_max_ratio", &t.recovery_max_ratio},
+      {"tracker", "keyframe_refused_matches_px", &t.keyframe_refused_matches_px},
       {"tracker", "compress_idle_patches_after_frames", &t.compress_idle_patches_after_frames},
       {"features", "fast_threshold", &t.features.fast_threshold},
       {"features", "min_fast_threshold", &t.features.min_fast_threshold},

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/tracking/tracker.h"
@@ -106,7 +107,8 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
       decideKeyframe(T_cam_world.inverseTranslation(), map_.keyframeCentres(), last_scene_depth_,
                      params_.keyframes, tracked, view);
   if (decision.drop) {
-    dropKeyframe(timestamp, image, inliers, result);
+    dropKeyframe(timestamp, image, inliers, refusedMatches(T_cam_world, ids, matches, inliers),
+                 result);
     if (result->message.empty()) result->message = keyframeReason(decision);
   }
   result->times.keyframe = stage.lapMs();
@@ -235,8 +237,29 @@ geometry::SE3 Tracker::solvePose(const geometry::SE3& T_guess, const std::vector
   return solved.T_cam_world;
 }
 
+std::vector<Tracker::Measurement> Tracker::refusedMatches(
+    const geometry::SE3& T_cam_world, const std::vector<map::PointId>& ids,
+    const std::vector<features::SearchMatch>& matches,
+    const std::vector<Measurement>& inliers) const {
+  std::vector<Measurement> refused;
+  const double max_px = params_.keyframe_refused_matches_px;
+  if (max_px <= 0.0) return refused;
+  std::unordered_set<map::PointId> accepted;
+  for (const Measurement& m : inliers)
+    accepted.insert(m.id);
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (!matches[i].found || accepted.count(ids[i]) || !map_.hasPoint(ids[i])) continue;
+    const std::optional<Eigen::Vector2d> px =
+        camera_->project(T_cam_world * map_.point(ids[i]).p_world);
+    if (px && (*px - matches[i].px).norm() < max_px)
+      refused.push_back({ids[i], matches[i].px, matches[i].xy});
+  }
+  return refused;
+}
+
 void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image,
-                           const std::vector<Measurement>& inliers, FrameResult* result) {
+                           const std::vector<Measurement>& inliers,
+                           const std::vector<Measurement>& refused, FrameResult* result) {
   const geometry::SE3& T_kf_world = T_previous_world_;
   map::KeyframeMessage message = makeKeyframe(timestamp, T_kf_world, image);
   const map::KeyframeId kf_id = message.keyframe.id;
@@ -245,6 +268,12 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   for (const Measurement& m : inliers) {
     message.keyframe.observations.push_back({m.id, m.xy});
     tracked.points.push_back(m.id);
+    occupied.push_back(m.px);
+  }
+  // Observations for the mapper's BA only: the tracker keeps refusing these points until the BA
+  // has moved them.
+  for (const Measurement& m : refused) {
+    message.keyframe.observations.push_back({m.id, m.xy});
     occupied.push_back(m.px);
   }
   map_.addKeyframe(std::move(tracked));
@@ -263,6 +292,9 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   }
   addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
   candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
+  // Everything the keyframe matched, refused matches included: the ratio rule then compares the
+  // frame's inliers with it (on real images, where 30-46 % of the matches are refused, keyframes
+  // come sooner; doc/frontend.md, "Refused matches in the keyframe").
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
   rememberKeyframePoints(message, image);
   // Idle points' patches compressed, looked at every half period (the points due only).

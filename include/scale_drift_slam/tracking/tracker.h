@@ -71,6 +71,12 @@ struct TrackerParams {
   /// texture; the share itself differs between cameras: ~0.95 on renders, 0.5-0.7 on real
   /// images). 0: never.
   double recover_on_inlier_share_drop = 0.6;
+  /// A keyframe also carries the matches its frame's pose refused within this many pixels of the
+  /// point's projection (0: none). A map point with a wrong depth is matched again and again on
+  /// the right texture and refused by every pose as its reprojection walks away; without an
+  /// observation no window BA ever sees that it is wrong (doc/benchmarks.md, "Where real images'
+  /// outliers come from"). With these, the BA (robust kernel) moves it.
+  double keyframe_refused_matches_px = 10.0;
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
   int compress_idle_patches_after_frames = 100;
@@ -227,8 +233,14 @@ class Tracker {
   geometry::SE3 solvePose(const geometry::SE3& T_guess, const std::vector<map::PointId>& ids,
                           const std::vector<features::SearchMatch>& matches,
                           std::vector<Measurement>* inliers, FrameResult* result);
+  /// The matches the pose refused within keyframe_refused_matches_px of their projection.
+  std::vector<Measurement> refusedMatches(const geometry::SE3& T_cam_world,
+                                          const std::vector<map::PointId>& ids,
+                                          const std::vector<features::SearchMatch>& matches,
+                                          const std::vector<Measurement>& inliers) const;
   void dropKeyframe(double timestamp, const features::ImagePyramid& image,
-                    const std::vector<Measurement>& inliers, FrameResult* result);
+                    const std::vector<Measurement>& inliers,
+                    const std::vector<Measurement>& refused, FrameResult* result);
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
                            features::PointAppearance appearance, map::KeyframeMessage* message);
