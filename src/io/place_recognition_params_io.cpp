@@ -106,6 +106,7 @@ loop::PlaceRecognitionParams parseRoot(const YAML::Node& root, const std::string
       {"max_islands_checked", set(p.max_islands_checked)},
       {"min_consistent_queries", set(p.min_consistent_queries)},
       {"consistency_gap", set(p.consistency_gap)},
+      {"consistency_max_missed", set(p.consistency_max_missed)},
       {"suppress_loop_continuation", set(p.suppress_loop_continuation)},
       {"continuation_gap", set(p.continuation_gap)}};
   apply(root, "", top, origin);

@@ -72,6 +72,7 @@ void PlaceRecognitionParams::validate() const {
   require(max_islands_checked >= 1, "max_islands_checked must be >= 1");
   require(min_consistent_queries >= 1, "min_consistent_queries must be >= 1");
   require(consistency_gap >= 0, "consistency_gap must be >= 0");
+  require(consistency_max_missed >= 0, "consistency_max_missed must be >= 0");
   require(continuation_gap >= 0, "continuation_gap must be >= 0");
 }
 

@@ -48,7 +48,7 @@ std::string PlaceQueryResult::describe() const {
            ", " + std::to_string(loop->geometry.inliers) + " inliers, coverage " +
            format("%.2f", loop->geometry.coverage) + ", scale change " +
            format("%.2f", loop->geometry.scale_change) + ", " +
-           std::to_string(loop->consistent_queries) + " consecutive queries)";
+           std::to_string(loop->consistent_queries) + " queries in a streak)";
   }
   if (candidates.empty()) {
     return text + "no candidate above the normalised score (" +
@@ -373,7 +373,9 @@ LoopCandidate PlaceRecognizer::checkIsland(const Island& island, double referenc
 
 void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_id,
                              const std::vector<Island>& checked, PlaceQueryResult& result) {
-  const bool consecutive = groups_query_.has_value() && *groups_query_ + 1 == query_position;
+  // A streak goes on through up to `consistency_max_missed` queries that verified nothing near
+  // it (on a revisit the odd keyframe fails the check: a passing car, a view turned away).
+  const auto missed = static_cast<std::size_t>(params_.consistency_max_missed);
   const auto gap = static_cast<std::size_t>(params_.consistency_gap);
   const auto near = [](std::size_t first, std::size_t last, std::size_t other_first,
                        std::size_t other_last, std::size_t margin) {
@@ -386,14 +388,13 @@ void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_i
     LoopCandidate& candidate = result.candidates[k];
     if (!candidate.geometry.passed) continue;
     int count = 1;
-    if (consecutive) {
-      for (const ConsistencyGroup& group : groups_) {
-        if (near(island.first, island.last, group.first, group.last, gap)) {
-          count = std::max(count, group.count + 1);
-        }
+    for (const ConsistencyGroup& group : groups_) {
+      if (group.query < query_position && query_position <= group.query + 1 + missed &&
+          near(island.first, island.last, group.first, group.last, gap)) {
+        count = std::max(count, group.count + 1);
       }
     }
-    groups.push_back(ConsistencyGroup{island.first, island.last, count});
+    groups.push_back(ConsistencyGroup{island.first, island.last, count, query_position});
     candidate.consistent_queries = count;
 
     const auto continued = std::find_if(loops_.begin(), loops_.end(), [&](const AcceptedLoop& l) {
@@ -410,7 +411,7 @@ void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_i
     } else if (count < params_.min_consistent_queries) {
       candidate.status = CandidateStatus::kNotYetConsistent;
       candidate.reason = "verified in " + std::to_string(count) + " of " +
-                         std::to_string(params_.min_consistent_queries) + " consecutive queries";
+                         std::to_string(params_.min_consistent_queries) + " queries in a streak";
     } else if (accepted) {
       candidate.status = CandidateStatus::kNotYetConsistent;
       candidate.reason = "a better island was accepted by this query";
@@ -420,8 +421,13 @@ void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_i
       loops_.push_back(AcceptedLoop{query_id, query_position, island.best});
     }
   }
+  // The earlier streaks the next query may still extend stay, beside this query's.
+  for (const ConsistencyGroup& group : groups_) {
+    if (group.query < query_position && query_position <= group.query + missed) {
+      groups.push_back(group);
+    }
+  }
   groups_ = std::move(groups);
-  groups_query_ = query_position;
 }
 
 }  // namespace scale_drift_slam::loop

@@ -81,9 +81,12 @@ struct PlaceRecognitionParams {
   int max_islands_checked = 3;  ///< Geometric checks per query, best islands first.
 
   /// A candidate is accepted when geometrically verified islands of `min_consistent_queries`
-  /// consecutive queries lie within `consistency_gap` keyframes of each other.
+  /// queries lie within `consistency_gap` keyframes of each other, the queries consecutive but
+  /// for at most `consistency_max_missed` queries between two of them that verified nothing
+  /// near (0: strictly consecutive, DLoopDetector's rule).
   int min_consistent_queries = 3;
   int consistency_gap = 5;
+  int consistency_max_missed = 2;
 
   /// Once a loop is accepted, candidates that just continue it (query and match both within
   /// `continuation_gap` keyframes of the last pair of that loop) are not accepted again.

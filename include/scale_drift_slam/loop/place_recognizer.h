@@ -2,12 +2,11 @@
 // Place recognition by appearance (doc/algorithm.md, "Loop closure detection"): a bag of
 // binary words over the keyframes' ORB descriptors, an inverted index with tf-idf L1 scores
 // normalised by the score against the previous keyframe, islands of neighbouring keyframes,
-// a geometric check against repeated texture, and consistency over consecutive queries
+// a geometric check against repeated texture, and consistency over a streak of queries
 // (doc/place_recognition.md). Loop verification (loop constraint, Sim(3)) comes after it.
 
 #include <deque>
 #include <memory>
-#include <optional>
 #include <string>
 #include <unordered_map>
 #include <unordered_set>
@@ -39,7 +38,7 @@ struct LoopCandidate {
   map::KeyframeId island_last_id = 0;
   double island_score = 0.0;  ///< Sum of the island members' scores.
   GeometricCheckResult geometry;
-  int consistent_queries = 0;  ///< Consecutive queries (this one included) verified nearby.
+  int consistent_queries = 0;  ///< Queries of the streak (this one included) verified nearby.
   CandidateStatus status = CandidateStatus::kFailedGeometry;
   std::string reason;  ///< Why it was not accepted; empty when accepted.
 };
@@ -159,11 +158,13 @@ class PlaceRecognizer {
     double score = 0.0;  ///< Sum of the members' scores.
     double best_score = 0.0;
   };
-  /// Candidates of earlier queries verified near [first, last] (document indices).
+  /// Candidates of earlier queries verified near [first, last] (document indices), `count`
+  /// queries in a row, the last of them at query position `query`.
   struct ConsistencyGroup {
     std::size_t first = 0;
     std::size_t last = 0;
     int count = 0;
+    std::size_t query = 0;
   };
   struct AcceptedLoop {
     map::KeyframeId accepted_query_id = 0;
@@ -192,8 +193,8 @@ class PlaceRecognizer {
   std::deque<Stored> keyframes_;
   std::unordered_map<map::KeyframeId, std::size_t> index_of_;
   BowDatabase database_;
+  /// Streaks a later query may still extend (at most `consistency_max_missed` queries old).
   std::vector<ConsistencyGroup> groups_;
-  std::optional<std::size_t> groups_query_;  ///< Query position groups_ belong to.
   std::vector<AcceptedLoop> loops_;
 };
 
