@@ -2,6 +2,7 @@
 collecting rosout, recording the camera trajectory from tf and scoring it with the package's own
 evaluate_trajectory tool."""
 
+import math
 import os
 import signal
 import subprocess
@@ -95,9 +96,13 @@ class Rosout(object):
             time.sleep(0.1)
         return []
 
-    def dump(self, node):
+    def dump(self, node, last=None, level=None):
+        """`node`'s messages (its `last` ones when given; at `level` or above when given), one a
+        line: a failure shows the end of a long log (CI folds the middle of what it prints)."""
         with self.lock:
-            return '\n'.join('%s [%d] %s' % m for m in self.messages if m[0].endswith(node))
+            lines = ['%s [%d] %s' % m for m in self.messages if m[0].endswith(node) and
+                     (level is None or m[1] >= level)]
+        return '\n'.join(lines[-last:] if last else lines)
 
 
 class _TimeoutTransport(xmlrpc.client.Transport):
@@ -194,6 +199,12 @@ def quaternion_product(a, b):
     bx, by, bz, bw = b
     return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
             aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
+def rotation_angle_deg(a, b):
+    """The angle of the rotation between two unit quaternions (x, y, z, w), in degrees."""
+    dot = abs(sum(x * y for x, y in zip(a, b)))
+    return math.degrees(2.0 * math.acos(min(1.0, dot)))
 
 
 # The rotation of the camera optical frame in the camera body frame (REP 103): x y z w.
