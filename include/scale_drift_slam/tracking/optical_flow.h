@@ -23,7 +23,7 @@ std::string flowMethodName(FlowMethod method);
 
 struct OpticalFlowParams {
   FlowMethod method = FlowMethod::kLucasKanade;
-  int window = 15;          ///< Lucas-Kanade window (pixels, odd).
+  int window = 11;          ///< Lucas-Kanade window (pixels, odd).
   int pyramid_levels = 4;   ///< Levels used by Lucas-Kanade (1 = no pyramid).
   int max_iterations = 20;  ///< Lucas-Kanade iterations per level.
   /// Lucas-Kanade stops iterating at a level once its step is below this (pixels of that level).
