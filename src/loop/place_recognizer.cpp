@@ -374,7 +374,7 @@ LoopCandidate PlaceRecognizer::checkIsland(const Island& island, double referenc
 void PlaceRecognizer::decide(std::size_t query_position, map::KeyframeId query_id,
                              const std::vector<Island>& checked, PlaceQueryResult& result) {
   // A streak goes on through up to `consistency_max_missed` queries that verified nothing near
-  // it (on a revisit the odd keyframe fails the check: a passing car, a view turned away).
+  // it (on a revisit single keyframes fail the check: too few matches or too little coverage).
   const auto missed = static_cast<std::size_t>(params_.consistency_max_missed);
   const auto gap = static_cast<std::size_t>(params_.consistency_gap);
   const auto near = [](std::size_t first, std::size_t last, std::size_t other_first,
