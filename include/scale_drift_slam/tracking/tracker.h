@@ -77,8 +77,9 @@ struct TrackerParams {
   /// observation no window BA ever sees that it is wrong (doc/benchmarks.md, "Where real images'
   /// outliers come from"). With these, the BA (robust kernel) moves it. Off by default: with a
   /// 5 s outage of the link between the tracker and the mapper (test twohosts_outage) the tracker
-  /// lost 30-80 frames in 3 of 9 runs with 10 px, in none of 10 without (doc/benchmarks.md,
-  /// "Refused matches and a link outage"). 10 px helps single-machine runs on real images.
+  /// lost 30-80 frames in 3 of 13 runs with 10 px and once in CI, in none of 10 without
+  /// (doc/benchmarks.md, "Refused matches and a link outage"). 10 px helps single-machine runs on
+  /// real images.
   double keyframe_refused_matches_px = 0.0;
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
