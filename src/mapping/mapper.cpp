@@ -52,19 +52,33 @@ void removePoints(map::Map& map, const std::vector<map::PointId>& sorted_ids,
 
 /// Removes the run-away points among `ids` from the map and lists them in the update (the
 /// tracker and the loop closer drop them too); their positions are taken out of the update.
+/// A point is measured from its reference keyframe, or, where that one observes nothing (a culled
+/// keyframe keeps its pose but no observations: median depth 0), from the first keyframe observing
+/// it. Skipping those let a point 1.02e6 map units out into an update, which the tracker refused
+/// whole, again at every update, while the point stayed in the window (test twohosts_outage).
 void removeRunawayPoints(map::Map& map, const std::vector<map::PointId>& ids,
                          map::MapUpdate& update) {
   std::unordered_map<map::KeyframeId, double> median;
+  auto medianOf = [&](const map::Keyframe& keyframe) {
+    auto it = median.find(keyframe.id);
+    if (it == median.end()) it = median.emplace(keyframe.id, medianDepth(map, keyframe)).first;
+    return it->second;
+  };
   std::vector<map::PointId> runaway;
   for (const map::PointId id : ids) {
     if (!map.hasPoint(id)) continue;
     const map::MapPoint& point = map.point(id);
-    if (!map.hasKeyframe(point.reference_keyframe)) continue;
-    const map::Keyframe& keyframe = map.keyframe(point.reference_keyframe);
-    auto it = median.find(keyframe.id);
-    if (it == median.end()) it = median.emplace(keyframe.id, medianDepth(map, keyframe)).first;
-    const double depth = (keyframe.T_kf_world * point.p_world).norm();
-    if (it->second > 0.0 && depth > kRunawayDepthRatio * it->second) runaway.push_back(id);
+    std::vector<map::KeyframeId> measured_from{point.reference_keyframe};
+    measured_from.insert(measured_from.end(), point.observed_by.begin(), point.observed_by.end());
+    for (const map::KeyframeId kf_id : measured_from) {
+      if (!map.hasKeyframe(kf_id)) continue;
+      const map::Keyframe& keyframe = map.keyframe(kf_id);
+      const double scene_depth = medianOf(keyframe);
+      if (!(scene_depth > 0.0)) continue;
+      if ((keyframe.T_kf_world * point.p_world).norm() > kRunawayDepthRatio * scene_depth)
+        runaway.push_back(id);
+      break;
+    }
   }
   std::sort(runaway.begin(), runaway.end());
   removePoints(map, runaway, update);

@@ -64,8 +64,10 @@ TEST(Mapper, WindowBaCorrectsPerturbedKeyframes) {
 
 // A point with (almost) no parallax, as on a car driving with the camera, sits anywhere along
 // its ray; one far beyond the scene (over 50 times the keyframe's median depth) is removed from
-// the map and listed in the update, a far but plausible one (17 times) is kept.
-TEST(Mapper, RunawayPointsAreRemoved) {
+// the map and listed in the update, a far but plausible one (17 times) is kept. With
+// `reference_observes` false the points' reference keyframe holds no observations, as a culled
+// keyframe: the depths are then measured from the first keyframe observing them.
+void expectRunawayPointRemoved(bool reference_observes) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> xy(-2.0, 2.0), z(4.0, 8.0);
   std::vector<Eigen::Vector3d> points;
@@ -85,8 +87,9 @@ TEST(Mapper, RunawayPointsAreRemoved) {
     message.keyframe.T_kf_world = truth(k);
     for (int i = 0; i < static_cast<int>(points.size()); ++i) {
       if (k == 0) message.new_points.push_back({static_cast<map::PointId>(i), points[i], 0});
-      message.keyframe.observations.push_back(
-          {static_cast<map::PointId>(i), (truth(k) * points[i]).hnormalized()});
+      if (k > 0 || reference_observes)
+        message.keyframe.observations.push_back(
+            {static_cast<map::PointId>(i), (truth(k) * points[i]).hnormalized()});
     }
     const map::MapUpdate update = mapper.addKeyframe(message);
     removed.insert(removed.end(), update.removed_points.begin(), update.removed_points.end());
@@ -97,6 +100,14 @@ TEST(Mapper, RunawayPointsAreRemoved) {
   EXPECT_FALSE(mapper.map().hasPoint(151));
   EXPECT_TRUE(mapper.map().hasPoint(150));
   EXPECT_EQ(mapper.map().numPoints(), 151u);
+}
+
+TEST(Mapper, RunawayPointsAreRemoved) {
+  expectRunawayPointRemoved(true);
+}
+
+TEST(Mapper, RunawayPointsAreRemovedWhenTheirReferenceKeyframeObservesNothing) {
+  expectRunawayPointRemoved(false);
 }
 
 }  // namespace
