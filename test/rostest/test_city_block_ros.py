@@ -24,17 +24,9 @@ from tf2_msgs.msg import TFMessage
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sds_rostest as sds  # noqa: E402
-from test_loop_closure import distance, is_identity, nearest  # noqa: E402
+from test_loop_closure import distance, is_identity, load_truth, nearest  # noqa: E402
 
 FRAMES = 474  # city_block's frames with the default seed
-
-
-def load_poses(folder):
-    """The ground truth: (stamp, position, quaternion x y z w) of the camera in the world."""
-    rows = [line.split() for line in open(os.path.join(folder, 'groundtruth.txt'))
-            if line.strip() and not line.startswith('#')]
-    return [(float(r[0]), tuple(float(v) for v in r[1:4]), tuple(float(v) for v in r[4:8]))
-            for r in rows]
 
 
 class CityBlock(unittest.TestCase):
@@ -61,7 +53,7 @@ class CityBlock(unittest.TestCase):
 
     def test_city_block_drive(self):
         bag, folder = sds.render_bag('city_block', FRAMES)
-        truth = load_poses(folder)
+        truth = load_truth(folder)
         start = time.time()
         sds.play_bag(bag)
         played = time.time() - start

@@ -40,9 +40,11 @@ KIDNAP_START = 1040.0      # their new stamps (the bag ends at 1029.97 s)
 
 
 def load_truth(folder):
-    rows = [l.split() for l in open(os.path.join(folder, 'groundtruth.txt'))
-            if l.strip() and not l.startswith('#')]
-    return [(float(r[0]), tuple(float(v) for v in r[1:4])) for r in rows]
+    """The ground truth: (stamp, position, quaternion x y z w) of the camera in the world."""
+    rows = [line.split() for line in open(os.path.join(folder, 'groundtruth.txt'))
+            if line.strip() and not line.startswith('#')]
+    return [(float(r[0]), tuple(float(v) for v in r[1:4]), tuple(float(v) for v in r[4:8]))
+            for r in rows]
 
 
 def nearest(rows, stamp):
