@@ -154,4 +154,14 @@ void FeatureCandidates::apply(const map::MapUpdate& update) {
   }
 }
 
+void FeatureCandidates::moveTail(map::KeyframeId anchor, const geometry::SE3& C_new_old) {
+  const geometry::SE3 C_old_new = C_new_old.inverse();
+  for (Candidate& c : candidates_) {
+    for (PromotionView& view : c.views) {
+      if (view.keyframe_id > anchor) view.T_kf_world = view.T_kf_world * C_old_new;
+    }
+    c.filter.setOriginPose(c.views.front().T_kf_world);
+  }
+}
+
 }  // namespace scale_drift_slam::tracking

@@ -313,8 +313,18 @@ void Tracker::restoreMap(
 }
 
 void Tracker::applyMapUpdate(const map::MapUpdate& update) {
+  // A bundle adjustment moved keyframes up to N while this tracker went on from newer ones (the
+  // mapper or the link behind, an outage): those, their points and the camera ride with N.
+  const std::optional<TrackingMap::TailCorrection> tail = map_.tailCorrection(update);
   if (!map_.apply(update)) return;
   candidates_.apply(update);
+  if (tail) {
+    map_.moveTail(*tail, update);
+    candidates_.moveTail(tail->anchor, tail->C_new_old);
+    const geometry::SE3 C_old_new = tail->C_new_old.inverse();
+    T_previous_world_ = T_previous_world_ * C_old_new;
+    T_before_previous_world_ = T_before_previous_world_ * C_old_new;
+  }
   if (!update.S_new_old) return;
   // A loop correction: the camera moves with the newest keyframe.
   const geometry::Sim3& S = *update.S_new_old;
@@ -360,8 +370,9 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
       makeKeyframe(initial->first_timestamp, geometry::SE3(), initial->first_image);
   map::KeyframeMessage second = makeKeyframe(timestamp, initial->T_second_first, image);
   TrackedKeyframe first_kf{
-      first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}};
-  TrackedKeyframe second_kf{second.keyframe.id, timestamp, second.keyframe.T_kf_world, {}};
+      first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}, next_point_id_};
+  TrackedKeyframe second_kf{
+      second.keyframe.id, timestamp, second.keyframe.T_kf_world, {}, next_point_id_};
   previous_measurements_.clear();
   std::vector<Eigen::Vector2d> occupied;
   for (std::size_t i = 0; i < initial->p_first.size(); ++i) {

@@ -263,7 +263,7 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
   const geometry::SE3& T_kf_world = T_previous_world_;
   map::KeyframeMessage message = makeKeyframe(timestamp, T_kf_world, image);
   const map::KeyframeId kf_id = message.keyframe.id;
-  TrackedKeyframe tracked{kf_id, timestamp, T_kf_world, {}};
+  TrackedKeyframe tracked{kf_id, timestamp, T_kf_world, {}, next_point_id_};
   std::vector<Eigen::Vector2d> occupied;
   for (const Measurement& m : inliers) {
     message.keyframe.observations.push_back({m.id, m.xy});

@@ -110,6 +110,40 @@ bool TrackingMap::apply(const map::MapUpdate& update) {
   return true;
 }
 
+std::optional<TrackingMap::TailCorrection> TrackingMap::tailCorrection(
+    const map::MapUpdate& update) const {
+  if (update.S_new_old || update.keyframe_poses.empty() || update.map_version < version_)
+    return std::nullopt;
+  const auto newest =
+      std::max_element(update.keyframe_poses.begin(), update.keyframe_poses.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto anchor = keyframes_.find(newest->first);
+  if (anchor == keyframes_.end() || std::next(anchor) == keyframes_.end()) return std::nullopt;
+  // T_new^-1 T_old maps the old world coordinates near the anchor into the new ones.
+  return TailCorrection{anchor->first, newest->second.inverse() * anchor->second.T_kf_world};
+}
+
+void TrackingMap::moveTail(const TailCorrection& tail, const map::MapUpdate& update) {
+  std::unordered_set<map::PointId> placed;
+  for (const auto& entry : update.point_positions)
+    placed.insert(entry.first);
+  const geometry::SE3 C_old_new = tail.C_new_old.inverse();
+  const auto first_tail = keyframes_.upper_bound(tail.anchor);
+  if (first_tail == keyframes_.end()) return;
+  // The points made in the tail: the mapper has not seen them (the others it placed or left).
+  const map::PointId first_new = first_tail->second.first_new_point;
+  std::unordered_set<map::PointId> moved;
+  for (auto it = first_tail; it != keyframes_.end(); ++it) {
+    it->second.T_kf_world = it->second.T_kf_world * C_old_new;
+    for (const map::PointId id : it->second.points) {  // every point made there is linked to it
+      const auto point = points_.find(id);
+      if (id < first_new || point == points_.end() || placed.count(id) || !moved.insert(id).second)
+        continue;
+      point->second.p_world = tail.C_new_old * point->second.p_world;
+    }
+  }
+}
+
 std::unordered_set<map::KeyframeId> TrackingMap::neighbourhood(
     const std::vector<map::KeyframeId>& start, int steps, int min_shared) const {
   std::unordered_set<map::KeyframeId> reached(start.begin(), start.end());

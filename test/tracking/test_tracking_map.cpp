@@ -1,7 +1,8 @@
 // The tracker's map copy: map updates move known keyframes and points, drop removed points,
 // ignore stale versions, and a Sim(3) loop correction moves keyframes and points together (a
 // point's projection into a keyframe does not change); local points come from the newest and
-// the nearest keyframes, each once.
+// the nearest keyframes, each once; keyframes the tracker made after the newest one an update
+// moves ride with that one.
 
 #include <algorithm>
 
@@ -21,7 +22,8 @@ TrackingMap smallMap() {
         {id,
          0.1 * id,
          geometry::SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-1.0 * id, 0, 0)),
-         {}});
+         {},
+         2 * id});  // its points: 2 id and 2 id + 1
   }
   for (map::PointId id = 0; id < 8; ++id) {
     TrackedPoint point;
@@ -69,6 +71,54 @@ TEST(TrackingMap, Sim3CorrectionKeepsProjections) {
              *update.S_new_old * Eigen::Vector3d(1, 0, 0))
                 .norm(),
             1e-12);
+}
+
+// The mapper's bundle adjustment moved keyframes 1-2 and points 2-5 (all by one rigid motion C,
+// point 5 also on its own) while the tracker had already made keyframe 3 with points 6-7: those
+// ride with keyframe 2, by C; keyframe 0 and its points, which the update leaves, stay.
+TEST(TrackingMap, KeyframesNewerThanAnUpdateRideWithItsNewestKeyframe) {
+  TrackingMap map = smallMap();
+  const geometry::SE3 C(geometry::expSO3(Eigen::Vector3d(0.02, 0.1, -0.05)),
+                        Eigen::Vector3d(0.3, -0.2, 0.5));
+  map::MapUpdate update;
+  update.map_version = 1;
+  for (map::KeyframeId id : {1u, 2u})
+    update.keyframe_poses.emplace_back(id, map.keyframe(id).T_kf_world * C.inverse());
+  for (map::PointId id = 2; id < 6; ++id)
+    update.point_positions.emplace_back(id, C * map.point(id).p_world);
+  update.point_positions.back().second += Eigen::Vector3d(0, 0, 0.1);
+  const TrackingMap before = map;
+
+  const std::optional<TrackingMap::TailCorrection> tail = map.tailCorrection(update);
+  ASSERT_TRUE(tail);
+  EXPECT_EQ(tail->anchor, 2u);
+  ASSERT_TRUE(map.apply(update));
+  map.moveTail(*tail, update);
+
+  const auto expectPose = [&](map::KeyframeId id, const geometry::SE3& expected) {
+    const geometry::SE3& T = map.keyframe(id).T_kf_world;
+    EXPECT_LT((T.translation() - expected.translation()).norm(), 1e-12) << "keyframe " << id;
+    EXPECT_LT(T.rotation().angularDistance(expected.rotation()), 1e-12) << "keyframe " << id;
+  };
+  expectPose(0, before.keyframe(0).T_kf_world);
+  expectPose(3, before.keyframe(3).T_kf_world * C.inverse());
+  for (map::PointId id : {6u, 7u})
+    EXPECT_LT((map.point(id).p_world - C * before.point(id).p_world).norm(), 1e-12) << id;
+  for (map::PointId id : {0u, 1u})
+    EXPECT_EQ(map.point(id).p_world, before.point(id).p_world);
+  EXPECT_EQ(map.point(5).p_world, update.point_positions.back().second);
+  // Keyframe 3 sees its points where it saw them before.
+  const Eigen::Vector3d seen = map.keyframe(3).T_kf_world * map.point(6).p_world;
+  EXPECT_LT((seen - before.keyframe(3).T_kf_world * before.point(6).p_world).norm(), 1e-12);
+
+  // No tail: an update of the newest keyframe, or a loop correction (which moves everything).
+  map::MapUpdate newest;
+  newest.map_version = 2;
+  newest.keyframe_poses.emplace_back(3, map.keyframe(3).T_kf_world);
+  EXPECT_FALSE(map.tailCorrection(newest));
+  update.map_version = 2;
+  update.S_new_old = geometry::Sim3();
+  EXPECT_FALSE(map.tailCorrection(update));
 }
 
 TEST(TrackingMap, ACulledKeyframeKeepsItsPoseButGivesNoPoints) {

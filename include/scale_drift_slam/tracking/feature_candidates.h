@@ -67,6 +67,9 @@ class FeatureCandidates {
 
   /// Keeps origin and view poses in step with the mapper's corrections.
   void apply(const map::MapUpdate& update);
+  /// The views at keyframes newer than `anchor` move with it by the world correction
+  /// `C_new_old` (TrackingMap::tailCorrection).
+  void moveTail(map::KeyframeId anchor, const geometry::SE3& C_new_old);
 
   std::size_t size() const { return candidates_.size(); }
   /// Candidates whose depth is certain enough for promotion (at the next keyframe).

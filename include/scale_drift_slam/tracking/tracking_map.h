@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -35,6 +36,8 @@ struct TrackedKeyframe {
   double timestamp = 0.0;
   geometry::SE3 T_kf_world;
   std::vector<map::PointId> points;  ///< Points it observes (or is the reference of).
+  /// The points made at this keyframe or later have ids from this one on (ids only grow).
+  map::PointId first_new_point = 0;
 };
 
 class TrackingMap {
@@ -52,6 +55,20 @@ class TrackingMap {
   /// for the keyframe rule and the points' patches). Updates older than the last applied
   /// version are ignored. Returns false when ignored.
   bool apply(const map::MapUpdate& update);
+
+  /// The keyframes the tracker made after the newest one a bundle-adjustment update moves (the
+  /// update's anchor) ride with it: the world correction C (p -> C p) that takes the anchor from
+  /// its pose here to its pose in `update`, for apply() to be followed by moveTail(). None when
+  /// the update corrects a loop (S_new_old moves everything), moves no keyframe held here, or no
+  /// keyframe here is newer than its anchor.
+  struct TailCorrection {
+    map::KeyframeId anchor = 0;
+    geometry::SE3 C_new_old;
+  };
+  std::optional<TailCorrection> tailCorrection(const map::MapUpdate& update) const;
+  /// Moves the keyframes newer than `tail.anchor` and the points made at them by
+  /// `tail.C_new_old`, except the points `update` placed itself.
+  void moveTail(const TailCorrection& tail, const map::MapUpdate& update);
 
   /// The local map (ids, each once): the points of the `num_recent` newest keyframes and of the
   /// `num_nearest` keyframes closest to `camera_centre` among the neighbourhood of the tracked
