@@ -77,11 +77,12 @@ struct TrackerParams {
   /// observation no window BA ever sees that it is wrong (doc/benchmarks.md, "Where real images'
   /// outliers come from"). With these, the BA (robust kernel) moves it. They also count among the
   /// keyframe's tracked points, so keyframes come sooner where many matches are refused, and
-  /// that is most of their gain on real images. Off by default: with a 5 s outage of the link
-  /// between the tracker and the mapper (test twohosts_outage) runs with 10 px lost 30-90 frames
-  /// or lost the scale in 7 of 22 (none of 10 without; doc/benchmarks.md, "Refused matches and a
-  /// link outage" and "... a second look"). 10 px helps single-machine runs on real images.
-  double keyframe_refused_matches_px = 0.0;
+  /// that is most of their gain on real images. With a 5 s outage of the link between the
+  /// tracker and the mapper (test twohosts_outage) they lost tracking or the scale in 7 of 22
+  /// runs, until the tracker's newer keyframes rode with the mapper's corrections
+  /// (TrackingMap::tailCorrection): then none of 9 (doc/benchmarks.md, "Refused matches and a
+  /// link outage: a second look").
+  double keyframe_refused_matches_px = 10.0;
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
   int compress_idle_patches_after_frames = 100;
