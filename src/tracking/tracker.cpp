@@ -319,7 +319,7 @@ void Tracker::applyMapUpdate(const map::MapUpdate& update) {
   if (!map_.apply(update)) return;
   candidates_.apply(update);
   if (tail) {
-    map_.moveTail(*tail, update);
+    map_.moveTail(*tail);
     candidates_.moveTail(tail->anchor, tail->C_new_old);
     const geometry::SE3 C_old_new = tail->C_new_old.inverse();
     T_previous_world_ = T_previous_world_ * C_old_new;

@@ -123,22 +123,19 @@ std::optional<TrackingMap::TailCorrection> TrackingMap::tailCorrection(
   return TailCorrection{anchor->first, newest->second.inverse() * anchor->second.T_kf_world};
 }
 
-void TrackingMap::moveTail(const TailCorrection& tail, const map::MapUpdate& update) {
-  std::unordered_set<map::PointId> placed;
-  for (const auto& entry : update.point_positions)
-    placed.insert(entry.first);
+void TrackingMap::moveTail(const TailCorrection& tail) {
   const geometry::SE3 C_old_new = tail.C_new_old.inverse();
   const auto first_tail = keyframes_.upper_bound(tail.anchor);
   if (first_tail == keyframes_.end()) return;
-  // The points made in the tail: the mapper has not seen them (the others it placed or left).
+  // The points made in the tail: the mapper has not seen them, no update places them (the others
+  // it placed or left where they are).
   const map::PointId first_new = first_tail->second.first_new_point;
   std::unordered_set<map::PointId> moved;
   for (auto it = first_tail; it != keyframes_.end(); ++it) {
     it->second.T_kf_world = it->second.T_kf_world * C_old_new;
     for (const map::PointId id : it->second.points) {  // every point made there is linked to it
       const auto point = points_.find(id);
-      if (id < first_new || point == points_.end() || placed.count(id) || !moved.insert(id).second)
-        continue;
+      if (id < first_new || point == points_.end() || !moved.insert(id).second) continue;
       point->second.p_world = tail.C_new_old * point->second.p_world;
     }
   }

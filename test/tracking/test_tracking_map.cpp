@@ -93,7 +93,7 @@ TEST(TrackingMap, KeyframesNewerThanAnUpdateRideWithItsNewestKeyframe) {
   ASSERT_TRUE(tail);
   EXPECT_EQ(tail->anchor, 2u);
   ASSERT_TRUE(map.apply(update));
-  map.moveTail(*tail, update);
+  map.moveTail(*tail);
 
   const auto expectPose = [&](map::KeyframeId id, const geometry::SE3& expected) {
     const geometry::SE3& T = map.keyframe(id).T_kf_world;

@@ -80,8 +80,8 @@ struct TrackerParams {
   /// that is most of their gain on real images. With a 5 s outage of the link between the
   /// tracker and the mapper (test twohosts_outage) they lost tracking or the scale in 7 of 22
   /// runs, until the tracker's newer keyframes rode with the mapper's corrections
-  /// (TrackingMap::tailCorrection): then none of 9 (doc/benchmarks.md, "Refused matches and a
-  /// link outage: a second look").
+  /// (TrackingMap::tailCorrection): then 15 of 15 passed (doc/benchmarks.md, "Refused matches
+  /// and a link outage: a second look").
   double keyframe_refused_matches_px = 10.0;
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.

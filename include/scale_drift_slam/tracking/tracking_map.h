@@ -66,9 +66,9 @@ class TrackingMap {
     geometry::SE3 C_new_old;
   };
   std::optional<TailCorrection> tailCorrection(const map::MapUpdate& update) const;
-  /// Moves the keyframes newer than `tail.anchor` and the points made at them by
-  /// `tail.C_new_old`, except the points `update` placed itself.
-  void moveTail(const TailCorrection& tail, const map::MapUpdate& update);
+  /// Moves the keyframes newer than `tail.anchor` and the points made at them (which no update
+  /// can place yet: the mapper has not seen them) by `tail.C_new_old`.
+  void moveTail(const TailCorrection& tail);
 
   /// The local map (ids, each once): the points of the `num_recent` newest keyframes and of the
   /// `num_nearest` keyframes closest to `camera_centre` among the neighbourhood of the tracked
