@@ -227,9 +227,9 @@ double parabolaPeak(double a, double b, double c) {
 
 }  // namespace
 
-CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params) {
-  return CornerGrid(detectFast(grey, params.fast_threshold, params.template_radius + 1), grey.cols,
-                    grey.rows);
+CornerGrid detectSearchCorners(const ImagePyramid& image, const ActiveSearchParams& params) {
+  return CornerGrid(image.corners()->detect(params.fast_threshold, params.template_radius + 1),
+                    image.base().cols, image.base().rows);
 }
 
 namespace {

@@ -31,6 +31,27 @@ std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int bor
   return corners;
 }
 
+std::vector<cv::KeyPoint> FastCornerCache::detect(int threshold, int border) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (threshold_ < 0 || threshold < threshold_ || border < border_) {
+    corners_ = detectFast(grey_, threshold, border);
+    threshold_ = threshold;
+    border_ = border;
+    return corners_;
+  }
+  const float x_end = static_cast<float>(grey_.cols - border);
+  const float y_end = static_cast<float>(grey_.rows - border);
+  std::vector<cv::KeyPoint> corners;
+  for (const cv::KeyPoint& corner : corners_) {
+    const cv::Point2f& p = corner.pt;
+    if (corner.response >= static_cast<float>(threshold) && p.x >= border && p.y >= border &&
+        p.x < x_end && p.y < y_end) {
+      corners.push_back(corner);
+    }
+  }
+  return corners;
+}
+
 namespace {
 
 struct QuadCell {
@@ -109,10 +130,12 @@ std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& co
   return selected;
 }
 
-std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_features,
-                                              const FeatureDetectionParams& params,
-                                              const std::vector<Eigen::Vector2d>& occupied) {
-  if (grey.empty() || max_features <= 0) return {};
+namespace {
+
+std::vector<cv::KeyPoint> spreadCorners(FastCornerCache* fast, const cv::Size& size,
+                                        int max_features, const FeatureDetectionParams& params,
+                                        const std::vector<Eigen::Vector2d>& occupied) {
+  if (size.empty() || max_features <= 0) return {};
   const CornerGrid occupied_grid(
       [&] {
         std::vector<cv::KeyPoint> points;
@@ -122,7 +145,7 @@ std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_featu
         }
         return points;
       }(),
-      grey.cols, grey.rows, 32);
+      size.width, size.height, 32);
   const double d = params.min_distance;
   std::vector<int> near;
   auto keepFree = [&](std::vector<cv::KeyPoint> corners) {
@@ -140,13 +163,29 @@ std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_featu
     }
     return free;
   };
-  std::vector<cv::KeyPoint> corners =
-      keepFree(detectFast(grey, params.fast_threshold, params.border));
+  std::vector<cv::KeyPoint> corners = keepFree(fast->detect(params.fast_threshold, params.border));
   if (static_cast<int>(corners.size()) < max_features &&
       params.min_fast_threshold < params.fast_threshold) {
-    corners = keepFree(detectFast(grey, params.min_fast_threshold, params.border));
+    corners = keepFree(fast->detect(params.min_fast_threshold, params.border));
   }
-  return distributeQuadtree(corners, max_features, grey.cols, grey.rows);
+  return distributeQuadtree(corners, max_features, size.width, size.height);
+}
+
+}  // namespace
+
+std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_features,
+                                              const FeatureDetectionParams& params,
+                                              const std::vector<Eigen::Vector2d>& occupied) {
+  if (grey.empty()) return {};
+  FastCornerCache corners(grey);
+  return spreadCorners(&corners, grey.size(), max_features, params, occupied);
+}
+
+std::vector<cv::KeyPoint> detectSpreadCorners(const ImagePyramid& image, int max_features,
+                                              const FeatureDetectionParams& params,
+                                              const std::vector<Eigen::Vector2d>& occupied) {
+  if (image.levels.empty()) return {};
+  return spreadCorners(image.corners().get(), image.base().size(), max_features, params, occupied);
 }
 
 CornerGrid::CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size)

@@ -1,5 +1,7 @@
 #include "scale_drift_slam/features/image_preparation.h"
 
+#include "scale_drift_slam/features/feature_detection.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -140,6 +142,43 @@ cv::Mat normalisePhotometry(const cv::Mat& grey, int radius) {
   return out;
 }
 
+namespace {
+
+/// `image` inside a buffer with `padding` pixels more on each side, filled by `border`.
+cv::Mat padded(const cv::Mat& image, int padding, int border) {
+  cv::Mat buffer;
+  cv::copyMakeBorder(image, buffer, padding, padding, padding, padding, border);
+  return buffer(cv::Rect(padding, padding, image.cols, image.rows));
+}
+
+/// The Scharr derivatives d/dx, d/dy of a grey image in one CV_16SC2 image (the layout of the
+/// gradients cv::buildOpticalFlowPyramid makes).
+cv::Mat scharrGradient(const cv::Mat& grey) {
+  cv::Mat dx, dy, gradient;
+  cv::Scharr(grey, dx, CV_16S, 1, 0);
+  cv::Scharr(grey, dy, CV_16S, 0, 1);
+  cv::merge(std::vector<cv::Mat>{dx, dy}, gradient);
+  return gradient;
+}
+
+}  // namespace
+
+std::vector<cv::Mat> ImagePyramid::lucasKanadePyramid(int num_levels) const {
+  const std::vector<cv::Mat>& flow = flowLevels();
+  const int n = std::min(num_levels, static_cast<int>(flow.size()));
+  const bool with_gradients = flow_gradients.size() == flow.size();
+  std::vector<cv::Mat> pyramid;
+  for (int level = 0; level < n; ++level) {
+    pyramid.push_back(flow[level]);
+    if (with_gradients) pyramid.push_back(flow_gradients[level]);
+  }
+  return pyramid;
+}
+
+std::shared_ptr<FastCornerCache> ImagePyramid::corners() const {
+  return fast_corners ? fast_corners : std::make_shared<FastCornerCache>(base());
+}
+
 ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding,
                           int photometric_radius) {
   if (grey.empty() || grey.type() != CV_8UC1) {
@@ -154,17 +193,27 @@ ImagePyramid buildPyramid(const cv::Mat& grey, int num_levels, int padding,
   }
   ImagePyramid pyramid;
   // cv::buildOpticalFlowPyramid halves with cv::pyrDown and pads every level by `padding`
-  // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it.
-  cv::buildOpticalFlowPyramid(grey, pyramid.levels, cv::Size(padding, padding), max_level, false,
-                              cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
+  // reflected pixels, the layout cv::calcOpticalFlowPyrLK reuses without rebuilding it. With
+  // the photometric normalisation the flow does not look at these levels: no gradients then.
+  const bool gradients_of_levels = photometric_radius <= 0;
+  std::vector<cv::Mat> built;
+  cv::buildOpticalFlowPyramid(grey, built, cv::Size(padding, padding), max_level,
+                              gradients_of_levels, cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT,
+                              false);
+  const std::size_t step = gradients_of_levels ? 2 : 1;
+  for (std::size_t i = 0; i < built.size(); i += step) {
+    pyramid.levels.push_back(built[i]);
+    if (gradients_of_levels) pyramid.flow_gradients.push_back(built[i + 1]);
+  }
+  pyramid.fast_corners = std::make_shared<FastCornerCache>(pyramid.base());
   if (photometric_radius > 0) {
     // Each level on its own: the coarse levels keep the structure that Lucas-Kanade needs for
     // large motions (a high-passed image, halved, would be flat there).
     for (const cv::Mat& level : pyramid.levels) {
-      cv::Mat padded;
-      cv::copyMakeBorder(normalisePhotometry(level, photometric_radius), padded, padding, padding,
-                         padding, padding, cv::BORDER_REFLECT_101);
-      pyramid.flow_levels.push_back(padded(cv::Rect(padding, padding, level.cols, level.rows)));
+      const cv::Mat normalised = normalisePhotometry(level, photometric_radius);
+      pyramid.flow_levels.push_back(padded(normalised, padding, cv::BORDER_REFLECT_101));
+      pyramid.flow_gradients.push_back(
+          padded(scharrGradient(normalised), padding, cv::BORDER_CONSTANT));
     }
   }
   return pyramid;

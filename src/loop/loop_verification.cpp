@@ -127,8 +127,7 @@ CandidateSearch searchCandidatePoints(const VerificationView& current,
   Sigma.diagonal().head<3>().setConstant(params.search_rotation_sigma *
                                          params.search_rotation_sigma);
   Sigma.diagonal().tail<3>().setConstant(translation_sigma * translation_sigma);
-  const features::CornerGrid corners =
-      features::detectSearchCorners(current.image.base(), params.search);
+  const features::CornerGrid corners = features::detectSearchCorners(current.image, params.search);
   const std::vector<features::SearchMatch> matches = features::activeSearch(
       points, T_current_loop, Sigma, camera, current.image, corners, params.search);
   for (std::size_t k = 0; k < matches.size(); ++k) {

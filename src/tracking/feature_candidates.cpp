@@ -113,7 +113,7 @@ int FeatureCandidates::spawn(map::KeyframeId keyframe, const geometry::SE3& T_kf
     occupied.push_back(c.px);
   int added = 0;
   for (const cv::KeyPoint& corner :
-       features::detectSpreadCorners(image.base(), room, detection_, occupied)) {
+       features::detectSpreadCorners(image, room, detection_, occupied)) {
     const Eigen::Vector2d px(corner.pt.x, corner.pt.y);
     features::PointAppearance appearance;
     if (!appearance.cut(image, px)) continue;

@@ -129,7 +129,7 @@ KeyframeTriangulation::Described KeyframeTriangulation::describe(
   described.id = id;
   described.image = image.base();  // shared, not copied
   std::vector<cv::KeyPoint> corners =
-      features::detectSpreadCorners(image.base(), params_.max_features, detection_, occupied);
+      features::detectSpreadCorners(image, params_.max_features, detection_, occupied);
   described.descriptors = describeCorners(image.base(), &corners);
   for (const cv::KeyPoint& corner : corners) {
     const Eigen::Vector2d px(corner.pt.x, corner.pt.y);

@@ -52,7 +52,7 @@ void MapInitializer::reset() {
 
 void MapInitializer::startReference(double timestamp, const features::ImagePyramid& image) {
   const std::vector<cv::KeyPoint> corners =
-      features::detectSpreadCorners(image.base(), params_.num_features, features_);
+      features::detectSpreadCorners(image, params_.num_features, features_);
   reference_px_.clear();
   for (const cv::KeyPoint& k : corners)
     reference_px_.push_back(k.pt);

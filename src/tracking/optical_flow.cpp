@@ -91,12 +91,10 @@ void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
                                    std::vector<cv::Point2f>* to,
                                    std::vector<unsigned char>* ok) const {
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
-  const std::vector<cv::Mat> prev_levels(previous.flowLevels().begin(),
-                                         previous.flowLevels().begin() + levels);
-  const std::vector<cv::Mat> cur_levels(current.flowLevels().begin(),
-                                        current.flowLevels().begin() + levels);
+  const std::vector<cv::Mat> prev_levels = previous.lucasKanadePyramid(levels);
+  const std::vector<cv::Mat> cur_levels = current.lucasKanadePyramid(levels);
   if (start) *to = *start;
-  lucasKanadePass(prev_levels, cur_levels, from, start != nullptr, to, ok);
+  lucasKanadePass(prev_levels, cur_levels, levels, from, start != nullptr, to, ok);
   if (start) {
     // A prediction can be wrong (the motion changed): where it moved a point and the flow
     // failed from there, try again from the point itself.
@@ -112,7 +110,7 @@ void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
     if (!retry.empty()) {
       std::vector<cv::Point2f> retry_to;
       std::vector<unsigned char> retry_ok;
-      lucasKanadePass(prev_levels, cur_levels, retry_from, false, &retry_to, &retry_ok);
+      lucasKanadePass(prev_levels, cur_levels, levels, retry_from, false, &retry_to, &retry_ok);
       for (std::size_t k = 0; k < retry.size(); ++k) {
         (*to)[retry[k]] = retry_to[k];
         (*ok)[retry[k]] = retry_ok[k];
@@ -122,12 +120,12 @@ void OpticalFlow::trackLucasKanade(const features::ImagePyramid& previous,
 }
 
 void OpticalFlow::lucasKanadePass(const std::vector<cv::Mat>& previous,
-                                  const std::vector<cv::Mat>& current,
+                                  const std::vector<cv::Mat>& current, int levels,
                                   const std::vector<cv::Point2f>& from, bool from_start,
                                   std::vector<cv::Point2f>* to,
                                   std::vector<unsigned char>* ok) const {
   if (from.empty()) return;
-  const int max_level = static_cast<int>(previous.size()) - 1;
+  const int max_level = levels - 1;
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
                                   params_.max_iterations, params_.min_step_px);
   const cv::Size window(params_.window, params_.window);
@@ -156,10 +154,8 @@ void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
                                 double max_px) const {
   if (from.empty()) return;
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
-  const std::vector<cv::Mat> prev_levels(previous.flowLevels().begin(),
-                                         previous.flowLevels().begin() + levels);
-  const std::vector<cv::Mat> cur_levels(current.flowLevels().begin(),
-                                        current.flowLevels().begin() + levels);
+  const std::vector<cv::Mat> prev_levels = previous.lucasKanadePyramid(levels);
+  const std::vector<cv::Mat> cur_levels = current.lucasKanadePyramid(levels);
   std::vector<cv::Point2f> back = from;
   std::vector<unsigned char> back_ok;
   std::vector<float> error;

@@ -28,7 +28,7 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
   const std::vector<features::SearchPoint> search_points = localSearchPoints(prior, &ids);
-  const features::CornerGrid corners = features::detectSearchCorners(image.base(), params_.search);
+  const features::CornerGrid corners = features::detectSearchCorners(image, params_.search);
   std::vector<features::SearchMatch> matches = features::activeSearch(
       search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners, params_.search);
   result->times.search = stage.lapMs();

@@ -59,8 +59,8 @@ Outcome search(const WallScene& s, const geometry::SE3& prior, double sigma) {
   }
   const ActiveSearchParams params;
   const Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Identity() * sigma * sigma;
-  const auto matches = activeSearch(points, prior, Sigma, *cam, s.cur,
-                                    detectSearchCorners(s.cur.base(), params), params);
+  const auto matches =
+      activeSearch(points, prior, Sigma, *cam, s.cur, detectSearchCorners(s.cur, params), params);
   Outcome o;
   std::vector<double> errors;
   for (std::size_t i = 0; i < matches.size(); ++i) {

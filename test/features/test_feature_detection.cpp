@@ -2,7 +2,9 @@
 // corner-rich image gets its share), respects the budget and the occupied pixels, and the corner
 // grid returns exactly the corners inside a box.
 
+#include <memory>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -75,6 +77,42 @@ TEST(FeatureDetection, CornerGridQueriesTheBox) {
   }
   grid.query(Eigen::Vector2d(NAN, 3), 5, 5, &found);
   EXPECT_TRUE(found.empty());
+}
+
+// A frame's corners are detected once: those of a higher threshold and a wider border are
+// filtered from the first detection, and are the corners a detection of their own finds (only
+// within 3 px of the wider border may they differ, where the non-maximum suppression of the
+// narrower border sees neighbours the wider one cuts off). A lower threshold detects again.
+TEST(FeatureDetection, CornersOfAHigherThresholdComeFromTheFirstDetection) {
+  const cv::Mat image = test::texturedImage(640, 480, 9);
+  const ImagePyramid pyramid = buildPyramid(image, 3);
+  const std::shared_ptr<FastCornerCache> cache = pyramid.corners();
+  ASSERT_EQ(cache, pyramid.corners());  // shared, not made again
+  const std::vector<cv::KeyPoint> search = cache->detect(8, 5);
+  ASSERT_EQ(search.size(), detectFast(image, 8, 5).size());
+  auto inside = [&](const std::vector<cv::KeyPoint>& corners, int margin) {
+    std::set<std::pair<int, int>> kept;
+    for (const cv::KeyPoint& k : corners) {
+      const cv::Point2f& p = k.pt;
+      if (p.x >= margin && p.y >= margin && p.x < image.cols - margin && p.y < image.rows - margin)
+        kept.insert({static_cast<int>(p.x), static_cast<int>(p.y)});
+    }
+    return kept;
+  };
+  const std::vector<cv::KeyPoint> filtered = cache->detect(20, 12);
+  const std::vector<cv::KeyPoint> own = detectFast(image, 20, 12);
+  ASSERT_GT(own.size(), 200u);
+  ASSERT_LT(own.size(), search.size());
+  EXPECT_EQ(inside(filtered, 16), inside(own, 16));
+  EXPECT_EQ(inside(filtered, 12).size(), filtered.size());  // the wider border holds
+  for (const cv::KeyPoint& k : filtered)
+    EXPECT_GE(k.response, 20.f);
+  // A lower threshold than any detected so far: detected anew.
+  EXPECT_EQ(inside(cache->detect(6, 12), 0), inside(detectFast(image, 6, 12), 0));
+  // The spread corners of the pyramid (cache) and of the image alone (own detections) agree.
+  FeatureDetectionParams params;
+  EXPECT_EQ(inside(detectSpreadCorners(pyramid, 150, params), 16),
+            inside(detectSpreadCorners(image, 150, params), 16));
 }
 
 }  // namespace

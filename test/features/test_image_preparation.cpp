@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
 
 #include "../tracking/synthetic_images.h"
 #include "scale_drift_slam/features/image_preparation.h"
@@ -121,6 +122,47 @@ TEST(ImagePreparation, PyramidHalvesEachLevel) {
   // A tiny image stops early instead of producing empty levels.
   EXPECT_EQ(buildPyramid(cv::Mat(100, 100, CV_8UC1, cv::Scalar(5)), 6).numLevels(), 3);
   EXPECT_THROW(buildPyramid(cv::Mat(), 2), std::invalid_argument);
+}
+
+// The gradients built with the pyramid are those cv::calcOpticalFlowPyrLK would compute on each
+// call: Lucas-Kanade gives the same tracks with them as without, for the plain levels and for
+// the photometrically normalised ones.
+TEST(ImagePreparation, GradientsBuiltWithThePyramidGiveTheSameFlow) {
+  const cv::Mat first = test::texturedImage(320, 240, 7);
+  cv::Mat second;
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 3.4, 0, 1, -2.2);
+  cv::warpAffine(first, second, shift, first.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
+  std::vector<cv::Point2f> from;
+  for (int y = 40; y < 200; y += 20) {
+    for (int x = 40; x < 280; x += 20)
+      from.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01);
+  for (const int photometric_radius : {0, 7}) {
+    const ImagePyramid a = buildPyramid(first, 3, 11, photometric_radius);
+    const ImagePyramid b = buildPyramid(second, 3, 11, photometric_radius);
+    ASSERT_EQ(a.flow_gradients.size(), a.flowLevels().size()) << photometric_radius;
+    ASSERT_EQ(a.lucasKanadePyramid(3).size(), 6u);
+    std::vector<cv::Point2f> with, without;
+    std::vector<unsigned char> ok_with, ok_without;
+    std::vector<float> error;
+    cv::calcOpticalFlowPyrLK(a.lucasKanadePyramid(3), b.lucasKanadePyramid(3), from, with, ok_with,
+                             error, cv::Size(11, 11), 2, criteria);
+    cv::calcOpticalFlowPyrLK(a.flowLevels(), b.flowLevels(), from, without, ok_without, error,
+                             cv::Size(11, 11), 2, criteria);
+    int tracked = 0;
+    for (std::size_t i = 0; i < from.size(); ++i) {
+      ASSERT_EQ(ok_with[i], ok_without[i]) << photometric_radius << " point " << i;
+      EXPECT_NEAR(with[i].x, without[i].x, 1e-4) << photometric_radius << " point " << i;
+      EXPECT_NEAR(with[i].y, without[i].y, 1e-4) << photometric_radius << " point " << i;
+      if (ok_with[i] && std::abs(with[i].x - from[i].x - 3.4f) < 0.3f &&
+          std::abs(with[i].y - from[i].y + 2.2f) < 0.3f) {
+        ++tracked;
+      }
+    }
+    // The shift found where there is texture (the grid also falls on flat shapes).
+    EXPECT_GT(tracked, static_cast<int>(from.size()) / 2) << photometric_radius;
+  }
 }
 
 }  // namespace

@@ -112,7 +112,7 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const ActiveSearchParams& params);
 
 /// The FAST corners of a frame for active search, bucketed for region queries.
-CornerGrid detectSearchCorners(const cv::Mat& grey, const ActiveSearchParams& params);
+CornerGrid detectSearchCorners(const ImagePyramid& image, const ActiveSearchParams& params);
 
 /// NCC of two equally sized float patches, in [-1, 1]; -1 when either has no texture.
 double normalizedCrossCorrelation(const float* a, const float* b, int n);

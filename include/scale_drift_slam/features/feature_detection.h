@@ -3,10 +3,14 @@
 // initialisation": candidates "spread evenly over the image with a quadtree"), and a bucket grid
 // over the corners of a frame so that active search can ask for the corners inside a region.
 
+#include <mutex>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+
+#include "scale_drift_slam/features/image_preparation.h"
 
 namespace scale_drift_slam::features {
 
@@ -21,11 +25,35 @@ struct FeatureDetectionParams {
 /// FAST corners (non-maximum suppressed) at least `border` pixels inside the image.
 std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int border);
 
+/// The FAST corners of one image, detected once for every threshold and border asked for after
+/// it: a corner's response is its FAST score, the highest threshold it passes, so the corners of
+/// a higher threshold are those of a lower one whose response reaches it (up to the non-maximum
+/// suppression next to the border). A frame asks for corners up to three times (active search,
+/// new features and the keyframe triangulation); each detection costs ~2 ms at 1241x376 on this
+/// machine. Thread-safe.
+class FastCornerCache {
+ public:
+  explicit FastCornerCache(cv::Mat grey) : grey_(std::move(grey)) {}
+  /// detectFast(grey, threshold, border), filtered from the last detection when that one used a
+  /// threshold and a border no larger; detected again (and kept) otherwise.
+  std::vector<cv::KeyPoint> detect(int threshold, int border);
+
+ private:
+  std::mutex mutex_;
+  cv::Mat grey_;
+  int threshold_ = -1, border_ = -1;  ///< Of corners_; -1: nothing detected yet.
+  std::vector<cv::KeyPoint> corners_;
+};
+
 /// Up to `max_features` corners spread over the image: the image is split recursively into
 /// quadrants (always the cell holding the most corners first) until there are `max_features`
 /// cells or no cell holds more than one corner; each cell keeps its strongest corner. Corners
 /// closer than `params.min_distance` to a pixel of `occupied` are dropped first.
 std::vector<cv::KeyPoint> detectSpreadCorners(const cv::Mat& grey, int max_features,
+                                              const FeatureDetectionParams& params,
+                                              const std::vector<Eigen::Vector2d>& occupied = {});
+/// The same in the base level of a pyramid, with its FAST corners (ImagePyramid::corners).
+std::vector<cv::KeyPoint> detectSpreadCorners(const ImagePyramid& image, int max_features,
                                               const FeatureDetectionParams& params,
                                               const std::vector<Eigen::Vector2d>& occupied = {});
 

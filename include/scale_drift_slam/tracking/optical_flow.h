@@ -79,8 +79,9 @@ class OpticalFlow {
                         const std::vector<cv::Point2f>* start, std::vector<cv::Point2f>* to,
                         std::vector<unsigned char>* ok) const;
   /// One Lucas-Kanade pass; `to` holds the start positions when `from_start` is set.
+  /// `previous` and `current` as ImagePyramid::lucasKanadePyramid gives them, `levels` deep.
   void lucasKanadePass(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
-                       const std::vector<cv::Point2f>& from, bool from_start,
+                       int levels, const std::vector<cv::Point2f>& from, bool from_start,
                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
   void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
