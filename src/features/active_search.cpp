@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -180,42 +181,49 @@ bool warpTemplate(const PointAppearance& appearance, const Eigen::Matrix2d& A_re
   return true;
 }
 
-/// Makes the template zero-mean with unit norm; false when it has no texture.
-bool normalizeTemplate(std::vector<float>* templ) {
+/// A template in fixed point: zero mean, unit norm, times kTemplateOne. The NCC then sums
+/// integers, which the compiler vectorises and which are exact (the float sums were neither:
+/// their sum of squares minus the squared sum lost up to 0.03 of the score to rounding), ~3x
+/// faster than in float.
+constexpr double kTemplateOne = 16384.0;
+
+/// The samples made zero-mean with unit norm, in fixed point; false when they have no texture.
+bool normalizeTemplate(const std::vector<float>& samples, std::vector<std::int16_t>* fixed) {
   double sum = 0.0;
-  for (const float v : *templ)
+  for (const float v : samples)
     sum += v;
-  const float mean = static_cast<float>(sum / templ->size());
+  const double mean = sum / samples.size();
   double norm_sq = 0.0;
-  for (float& v : *templ) {
-    v -= mean;
-    norm_sq += v * v;
-  }
-  if (norm_sq < 1e-6 * templ->size()) return false;
-  const float scale = static_cast<float>(1.0 / std::sqrt(norm_sq));
-  for (float& v : *templ)
-    v *= scale;
+  for (const float v : samples)
+    norm_sq += (v - mean) * (v - mean);
+  if (norm_sq < 1e-6 * samples.size()) return false;
+  const double scale = kTemplateOne / std::sqrt(norm_sq);
+  fixed->resize(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    (*fixed)[i] = static_cast<std::int16_t>(std::lround((samples[i] - mean) * scale));
   return true;
 }
 
-/// NCC of a normalised template (zero mean, unit norm) with the image patch centred at integer
-/// pixel (x, y), in one pass: sum t b / sqrt(sum b^2 - (sum b)^2 / n). -2 off the image.
-double scoreAt(const cv::Mat& image, int x, int y, int r, const std::vector<float>& templ) {
+/// NCC of a normalised template with the image patch centred at integer pixel (x, y), in one
+/// pass: sum t b / sqrt(sum b^2 - (sum b)^2 / n). -2 off the image.
+double scoreAt(const cv::Mat& image, int x, int y, int r, const std::vector<std::int16_t>& templ) {
   if (x < r || y < r || x + r >= image.cols || y + r >= image.rows) return -2.0;
-  float sb = 0.f, sbb = 0.f, stb = 0.f;
-  const float* t = templ.data();
+  // At most 121 pixels of 255: the sums stay far below 2^31 (|t| <= 2^14).
+  std::int32_t sb = 0, sbb = 0, stb = 0;
+  const std::int16_t* t = templ.data();
   for (int dy = -r; dy <= r; ++dy) {
     const unsigned char* row = image.ptr<unsigned char>(y + dy) + x - r;
     for (int dx = 0; dx <= 2 * r; ++dx, ++t) {
-      const float b = row[dx];
+      const std::int32_t b = row[dx];
       sb += b;
       sbb += b * b;
       stb += *t * b;
     }
   }
-  const float variance = sbb - sb * sb / static_cast<float>(templ.size());
-  if (variance < 1e-3f * templ.size()) return -1.0;
-  return stb / std::sqrt(variance);
+  const double n = static_cast<double>(templ.size());
+  const double variance = sbb - static_cast<double>(sb) * sb / n;
+  if (variance < 1e-3 * n) return -1.0;
+  return stb / (kTemplateOne * std::sqrt(variance));
 }
 
 /// The vertex of the parabola through (-1, a), (0, b), (1, c), within [-0.5, 0.5].
@@ -296,14 +304,15 @@ void matchPoint(const SearchPoint& point, const Prediction& prediction,
                 const geometry::SE3& T_cur_world, const Eigen::Matrix<double, 6, 6>& Sigma_Delta,
                 const geometry::CameraModel& camera, const cv::Mat& image,
                 const CornerGrid& corners, const ActiveSearchParams& params,
-                std::vector<float>* templ, std::vector<int>* candidates, SearchMatch* match) {
+                std::vector<float>* samples, std::vector<std::int16_t>* templ,
+                std::vector<int>* candidates, SearchMatch* match) {
   const int r = params.template_radius;
   match->searched = true;
   const geometry::SE3 T_cur_ref = T_cur_world * point.T_ref_world.inverse();
   if (!warpTemplate(*point.appearance,
                     referenceWarp(camera, prediction.p_ref, prediction.p_cur, T_cur_ref), r,
-                    templ) ||
-      !normalizeTemplate(templ)) {
+                    samples) ||
+      !normalizeTemplate(*samples, templ)) {
     return;
   }
   // Innovation covariance of the prediction: J Sigma_Delta J^T + sigma^2 I (+ the floor that
@@ -362,12 +371,13 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
       predictions.push_back(prediction);
     }
   }
-  std::vector<float> templ;
+  std::vector<float> samples;
+  std::vector<std::int16_t> templ;
   std::vector<int> candidates;
   for (const Prediction& prediction : spread(std::move(predictions), matches, camera.width(),
                                              camera.height(), params.max_points)) {
     matchPoint(points[prediction.index], prediction, T_cur_world, Sigma_Delta, camera, image.base(),
-               corners, params, &templ, &candidates, &matches[prediction.index]);
+               corners, params, &samples, &templ, &candidates, &matches[prediction.index]);
   }
   return matches;
 }
