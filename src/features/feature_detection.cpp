@@ -34,10 +34,10 @@ std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int bor
 std::vector<cv::KeyPoint> FastCornerCache::detect(int threshold, int border) {
   const std::lock_guard<std::mutex> lock(mutex_);
   if (threshold_ < 0 || threshold < threshold_ || border < border_) {
-    corners_ = detectFast(grey_, threshold, border);
-    threshold_ = threshold;
-    border_ = border;
-    return corners_;
+    // The lowest threshold and the narrowest border asked for so far: it serves them all.
+    threshold_ = threshold_ < 0 ? threshold : std::min(threshold, threshold_);
+    border_ = border_ < 0 ? border : std::min(border, border_);
+    corners_ = detectFast(grey_, threshold_, border_);
   }
   const float x_end = static_cast<float>(grey_.cols - border);
   const float y_end = static_cast<float>(grey_.rows - border);

@@ -34,8 +34,8 @@ std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int bor
 class FastCornerCache {
  public:
   explicit FastCornerCache(cv::Mat grey) : grey_(std::move(grey)) {}
-  /// detectFast(grey, threshold, border), filtered from the last detection when that one used a
-  /// threshold and a border no larger; detected again (and kept) otherwise.
+  /// detectFast(grey, threshold, border), filtered from the detection kept, which is made again
+  /// at the lowest threshold and narrowest border asked for so far when this asks for less.
   std::vector<cv::KeyPoint> detect(int threshold, int border);
 
  private:
