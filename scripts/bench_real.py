@@ -18,7 +18,6 @@ import time
 from pathlib import Path
 
 MOVING_THRESHOLD_M = 0.01  # the camera "starts moving" when GT is this far from its first pose
-MIN_PATH_FOR_DRIFT_M = 10.0  # shorter tracked paths get no drift per 100 m (too much extrapolation)
 TRACKING_STATES = ("good", "weak")
 GROUND_TRUTH_NAMES = ("groundtruth_tum.txt", "groundtruth.txt")
 
@@ -240,9 +239,9 @@ def evaluate(sequence, bin_dir, out):
     segments = evaluation.get("scale_segments", [])
     figures["scale_per_tenth"] = [s["scale"] for s in segments]
     figures["scale_last_over_first"] = evaluation.get("scale_drift")
-    # evaluate_trajectory's least-squares slope of log(scale) over the tenths' middle distances.
-    figures["drift_percent_per_100m"] = (evaluation.get("scale_drift_per_100m_percent")
-                                         if path_length >= MIN_PATH_FOR_DRIFT_M else None)
+    # evaluate_trajectory's least-squares slope of log(scale) over the tenths' middle distances;
+    # null for an evaluated path under 10 m (not extrapolated to 100 m).
+    figures["drift_percent_per_100m"] = evaluation.get("scale_drift_per_100m_percent")
 
 
 # --- the table ---------------------------------------------------------------------------------

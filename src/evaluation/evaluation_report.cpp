@@ -1,5 +1,6 @@
 #include "scale_drift_slam/evaluation/evaluation_report.h"
 
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
@@ -71,7 +72,9 @@ nlohmann::json toJson(const TrajectoryEvaluation& e) {
                                       {"scale", s.scale}});
   }
   json["scale_drift"] = e.scale_drift;
-  json["scale_drift_per_100m_percent"] = e.scale_drift_per_100m;
+  json["scale_drift_over_path_percent"] = e.scale_drift_over_path;
+  json["scale_drift_per_100m_percent"] =
+      std::isfinite(e.scale_drift_per_100m) ? nlohmann::json(e.scale_drift_per_100m) : nullptr;
   return json;
 }
 
@@ -96,8 +99,12 @@ std::string summaryText(const TrajectoryEvaluation& e) {
     text += "scale per segment  ";
     for (const ScaleSegment& s : e.scale_segments)
       text += format(" %.4f", s.scale);
-    text += format("\nscale drift         %.4f (last segment / first), %+.2f %% per 100 m\n",
-                   e.scale_drift, e.scale_drift_per_100m);
+    text += format("\nscale drift         %.4f (last segment / first), %+.2f %% over the path",
+                   e.scale_drift, e.scale_drift_over_path);
+    text += std::isfinite(e.scale_drift_per_100m)
+                ? format(", %+.2f %% per 100 m\n", e.scale_drift_per_100m)
+                : format(" (not extrapolated to 100 m from a path under %.0f m)\n",
+                         kMinPathForDriftPer100m);
   }
   return text;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "scale_drift_slam/evaluation/alignment.h"
@@ -9,8 +10,9 @@
 namespace scale_drift_slam::evaluation {
 namespace {
 
-/// TrajectoryEvaluation::scale_drift_per_100m.
-double scaleDriftPer100m(const std::vector<ScaleSegment>& segments) {
+/// The least-squares slope of log(scale) against the segments' middle distances, per metre of
+/// the true path (TrajectoryEvaluation::scale_drift_over_path).
+double logScaleSlopePerMetre(const std::vector<ScaleSegment>& segments) {
   if (segments.size() < 2) return 0.0;
   double mean_d = 0.0, mean_s = 0.0;
   for (const ScaleSegment& s : segments) {
@@ -26,7 +28,7 @@ double scaleDriftPer100m(const std::vector<ScaleSegment>& segments) {
     spread += d * d;
   }
   if (!(spread > 0.0)) return 0.0;
-  return 100.0 * (std::exp(100.0 * covariance / spread) - 1.0);
+  return covariance / spread;
 }
 
 geometry::Sim3 align(const std::vector<Eigen::Vector3d>& estimate,
@@ -244,7 +246,11 @@ TrajectoryEvaluation evaluateTrajectory(std::vector<io::StampedPose> truth,
   if (!result.scale_segments.empty()) {
     result.scale_drift = result.scale_segments.back().scale / result.scale_segments.front().scale;
   }
-  result.scale_drift_per_100m = scaleDriftPer100m(result.scale_segments);
+  const double slope = logScaleSlopePerMetre(result.scale_segments);
+  result.scale_drift_over_path = 100.0 * (std::exp(slope * result.truth_path_length) - 1.0);
+  result.scale_drift_per_100m = result.truth_path_length >= kMinPathForDriftPer100m
+                                    ? 100.0 * (std::exp(100.0 * slope) - 1.0)
+                                    : std::numeric_limits<double>::quiet_NaN();
   return result;
 }
 

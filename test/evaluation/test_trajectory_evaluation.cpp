@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "scale_drift_slam/evaluation/evaluation_report.h"
 #include "scale_drift_slam/evaluation/trajectory_evaluation.h"
 
 namespace scale_drift_slam::evaluation {
@@ -118,8 +119,33 @@ TEST(TrajectoryEvaluation, MeasuresTheScaleDriftPer100m) {
   }
   const TrajectoryEvaluation e = evaluateTrajectory(truth, estimate);
   EXPECT_NEAR(e.scale_drift_per_100m, 100.0 * (std::exp(-100.0 * c) - 1.0), 0.5);
+  EXPECT_NEAR(e.scale_drift_over_path, 100.0 * (std::exp(-c * e.truth_path_length) - 1.0), 0.5);
   // No drift: 0.
   EXPECT_NEAR(evaluateTrajectory(truth, truth).scale_drift_per_100m, 0.0, 1e-6);
+}
+
+TEST(TrajectoryEvaluation, DoesNotExtrapolateTheDriftOfAShortPathTo100m) {
+  // A 0.6 m path whose scale falls by ~20 % (the estimate's steps grow as exp(c s), as above):
+  // extrapolated to 100 m that would be exp(-37) - 1, -100 % to 14 digits, meaningless (and a
+  // growing scale would give 10^16 %). The drift over the path is kept.
+  std::vector<io::StampedPose> truth, estimate;
+  const double c = 0.37;  // per metre
+  double s = 0;
+  for (int i = 0; i < 60; ++i, s += 0.01) {
+    const geometry::SE3 pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(s, 0.0, 0.0));
+    truth.push_back({0.1 * i, pose});
+    const double estimated_s = (std::exp(c * s) - 1.0) / c;  // steps of length exp(c s)
+    estimate.push_back({0.1 * i, geometry::SE3(Eigen::Quaterniond::Identity(),
+                                               Eigen::Vector3d(estimated_s, 0.0, 0.0))});
+  }
+  const TrajectoryEvaluation e = evaluateTrajectory(truth, estimate);
+  ASSERT_LT(e.truth_path_length, kMinPathForDriftPer100m);
+  EXPECT_TRUE(std::isnan(e.scale_drift_per_100m));
+  EXPECT_NEAR(e.scale_drift_over_path, 100.0 * (std::exp(-c * e.truth_path_length) - 1.0), 2.0);
+  EXPECT_LT(e.scale_drift_over_path, -10.0);
+  const std::string text = summaryText(e);
+  EXPECT_NE(text.find("not extrapolated to 100 m"), std::string::npos) << text;
+  EXPECT_TRUE(toJson(e)["scale_drift_per_100m_percent"].is_null());
 }
 
 TEST(TrajectoryEvaluation, MeasuresAKnownRotationDriftInTheRpe) {

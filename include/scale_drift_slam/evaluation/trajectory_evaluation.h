@@ -77,11 +77,18 @@ struct TrajectoryEvaluation {
   std::vector<RelativePoseError> rpe;  ///< Distances longer than the path are left out.
   std::vector<ScaleSegment> scale_segments;
   double scale_drift = 1;  ///< Scale of the last segment / scale of the first.
-  /// Scale drift per 100 m of the true path, in %: the least-squares slope b of log(scale)
-  /// against the segments' middle distances, as 100 (exp(100 b) - 1). 0 with fewer than two
-  /// segments.
+  /// Scale drift over the true path, in %: the least-squares slope b of log(scale) against the
+  /// segments' middle distances, as 100 (exp(b L) - 1) for the path length L. 0 with fewer than
+  /// two segments.
+  double scale_drift_over_path = 0;
+  /// The same slope per 100 m of the true path, 100 (exp(100 b) - 1), in %; NaN for a path
+  /// shorter than kMinPathForDriftPer100m, where the extrapolation means nothing (a 20 % drift
+  /// over 0.5 m would be 2^40 % per 100 m).
   double scale_drift_per_100m = 0;
 };
+
+/// The shortest true path whose scale drift is extrapolated to 100 m, metres.
+inline constexpr double kMinPathForDriftPer100m = 10.0;
 
 /// Evaluates; throws std::invalid_argument for bad parameters and std::runtime_error when fewer
 /// than 3 poses can be associated (naming the counts and the time tolerance).
