@@ -127,7 +127,7 @@ TEST(TrajectoryEvaluation, MeasuresTheScaleDriftPer100m) {
 TEST(TrajectoryEvaluation, DoesNotExtrapolateTheDriftOfAShortPathTo100m) {
   // A 0.6 m path whose scale falls by ~20 % (the estimate's steps grow as exp(c s), as above):
   // extrapolated to 100 m that would be exp(-37) - 1, -100 % to 14 digits, meaningless (and a
-  // growing scale would give 10^16 %). The drift over the path is kept.
+  // growing scale would give ~10^18 %). The drift over the path is kept.
   std::vector<io::StampedPose> truth, estimate;
   const double c = 0.37;  // per metre
   double s = 0;

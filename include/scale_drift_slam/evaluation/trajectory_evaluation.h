@@ -83,7 +83,7 @@ struct TrajectoryEvaluation {
   double scale_drift_over_path = 0;
   /// The same slope per 100 m of the true path, 100 (exp(100 b) - 1), in %; NaN for a path
   /// shorter than kMinPathForDriftPer100m, where the extrapolation means nothing (a 20 % drift
-  /// over 0.5 m would be 2^40 % per 100 m).
+  /// over 0.5 m would be ~10^18 % per 100 m).
   double scale_drift_per_100m = 0;
 };
 
