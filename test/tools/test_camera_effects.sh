@@ -4,8 +4,9 @@
 # the first pose on, with the ATE (Sim(3)) <= 1 % of the path: rolling shutter (30 ms readout,
 # every row at its own pose), vignetting, auto-exposure over sunlit patches that clip (with the
 # scene's brightness changing), JPEG at quality 75 (bgr8 with noise, as compressed image_transport
-# delivers), defocus, all of them at once, and the repetitive facade_grid scene (front end and
-# mapping: its loop closure is pending, see pending_facade_grid_loops.sh). ~1 min.
+# delivers), defocus, motion blur (a 20 ms shutter at 30 Hz, orbiting an office), all of them at
+# once, and the repetitive facade_grid scene (front end and mapping: its loop closure is pending,
+# see pending_facade_grid_loops.sh). ~1.5 min.
 set -euo pipefail
 bin="${SDS_BIN_DIR:?}"
 work="${SDS_TEST_OUTPUT_DIR:?}/camera_effects"
@@ -35,12 +36,13 @@ check auto_exposure courtyard_loop 300 "" --auto-exposure --exposure 0.3 --expos
   --noise 1
 check jpeg office_orbit 300 "" --jpeg 75 --color --noise 1
 check defocus office_orbit 300 "" --defocus 3
+check motion_blur office_orbit 300 "" --motion-blur 0.02 --noise 1
 check all_effects courtyard_loop 300 "" --rolling-shutter 0.03 --vignetting 0.4 --auto-exposure \
   --defocus 1.5 --noise 1 --jpeg 80
 check facade_grid facade_grid 600 --no-loop-closure
 
 # Bad values are refused with one line.
-for bad in "--rolling-shutter -1" "--vignetting 1" "--jpeg 0" "--jpeg 101" "--defocus 50" \
+for bad in "--motion-blur 2" "--rolling-shutter -1" "--vignetting 1" "--jpeg 0" "--jpeg 101" "--defocus 50" \
            "--sunlight 0.5"; do
   # shellcheck disable=SC2086
   if "$bin/render_sequence" --scene desk --out "$work/bad" $bad > "$work/bad.log" 2>&1; then
