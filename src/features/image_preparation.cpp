@@ -245,8 +245,16 @@ double stretchContrast(cv::Mat* grey, double target_range, double max_gain) {
   if (range <= 0.0 || range >= target_range) return 1.0;
   const double gain = std::min(max_gain, target_range / range);
   if (gain <= 1.0) return 1.0;
+  // Scaled about the range's centre, then moved just enough to keep the scaled range inside
+  // 0-255. Not moved to mid-grey: a frame whose range hovers about the target (a textureless
+  // wall in and out of view, motion blur) would be shifted by tens of grey levels on and off,
+  // and the optical flow, which assumes a point keeps its grey level, fails on those frames.
+  // This way the map tends to the identity as the range nears the target.
   const double centre = 0.5 * (low + high);
-  grey->convertTo(*grey, CV_8U, gain, 127.5 - gain * centre);
+  const double scaled_low = centre + gain * (low - centre);
+  const double scaled_high = centre + gain * (high - centre);
+  const double shift = std::max(0.0, -scaled_low) - std::max(0.0, scaled_high - 255.0);
+  grey->convertTo(*grey, CV_8U, gain, (1.0 - gain) * centre + shift);
   return gain;
 }
 

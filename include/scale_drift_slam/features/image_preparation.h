@@ -84,7 +84,10 @@ cv::Mat normalisePhotometry(const cv::Mat& grey, int radius);
 
 /// Stretches a low-contrast frame: when the range between its 1st and 99th grey-level
 /// percentiles is below `target_range`, the grey values are scaled by
-/// min(max_gain, target_range / range) about that range's centre, which is moved to mid-grey.
+/// min(max_gain, target_range / range) about that range's centre, then moved just enough to keep
+/// the scaled range inside 0-255 (not to mid-grey: the map tends to the identity as the range
+/// nears the target, so a frame whose range hovers about it is not shifted on and off by tens of
+/// grey levels, which the optical flow between two frames cannot follow).
 /// Why: a dark or washed-out frame (a camera still adapting its exposure, a dim scene) holds
 /// the same structure as a well-exposed one at a fraction of the grey levels, and the corner
 /// detectors' thresholds are absolute; the cap keeps sensor noise (and fixed-pattern noise in
