@@ -65,6 +65,13 @@ void CameraCalibration::validate() const {
       << height << " image";
     fail(s.str());
   }
+  if (!std::isfinite(rolling_shutter_readout_s) || rolling_shutter_readout_s < 0.0 ||
+      rolling_shutter_readout_s > 1.0) {
+    std::ostringstream s;
+    s << "rolling_shutter_readout_s (" << rolling_shutter_readout_s
+      << ") must be in [0, 1] seconds (0: a global shutter)";
+    fail(s.str());
+  }
   const size_t n = distortion.size();
   if (model == DistortionModel::kRadialTangential && n != 0 && n != 4 && n != 5) {
     fail("plumb_bob takes 0, 4 or 5 coefficients (k1 k2 p1 p2 [k3]), got " + std::to_string(n));
@@ -94,6 +101,9 @@ std::string CameraCalibration::describe() const {
   for (size_t i = 0; i < distortion.size(); ++i)
     s << (i ? " " : "") << distortion[i];
   s << "]";
+  if (rolling_shutter_readout_s > 0.0) {
+    s << " rolling shutter readout " << 1000.0 * rolling_shutter_readout_s << " ms";
+  }
   return s.str();
 }
 

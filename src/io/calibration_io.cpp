@@ -57,6 +57,8 @@ const std::vector<Layout>& layouts() {
 const std::vector<std::string> kDistortionLists = {"distortion", "D", "distortion_coefficients",
                                                    "distortion_coeffs"};
 const std::vector<std::string> kDistortionCoefficients = {"k1", "k2", "p1", "p2", "k3", "k4"};
+/// A rolling shutter's readout time (s), accepted in every layout (none of them has one).
+const std::string kReadoutKey = "rolling_shutter_readout_s";
 
 std::string acceptedLayouts() {
   std::string text;
@@ -82,6 +84,7 @@ const Layout& layoutOf(const YAML::Node& node, const std::string& origin) {
       accepted.insert(accepted.end(), kDistortionLists.begin(), kDistortionLists.end());
       accepted.insert(accepted.end(), kDistortionCoefficients.begin(),
                       kDistortionCoefficients.end());
+      accepted.push_back(kReadoutKey);
       for (const std::string& key : keysOf(node, origin)) {
         if (std::find(accepted.begin(), accepted.end(), key) != accepted.end()) continue;
         fail(origin, unknownKeyMessage("key", key, accepted) + " in a file read as " + layout.name +
@@ -270,6 +273,8 @@ CameraCalibration parseCalibrationYaml(const std::string& text, const std::strin
   readIntrinsics(node, layout, origin, &calibration);
   // A five-element plumb_bob list of zeros is the same as none; keep it as the user wrote it.
   calibration.distortion = readDistortion(node, calibration.model, origin);
+  if (node[kReadoutKey])
+    calibration.rolling_shutter_readout_s = read<double>(node, kReadoutKey, origin);
   try {
     calibration.validate();
   } catch (const std::invalid_argument& e) {
@@ -299,6 +304,9 @@ void saveCalibrationYaml(const CameraCalibration& calibration, const std::string
   out << YAML::Key << "distortion_model" << YAML::Value
       << geometry::distortionModelName(calibration.model);
   out << YAML::Key << "distortion" << YAML::Value << YAML::Flow << calibration.distortion;
+  if (calibration.rolling_shutter_readout_s > 0.0) {
+    out << YAML::Key << kReadoutKey << YAML::Value << calibration.rolling_shutter_readout_s;
+  }
   out << YAML::EndMap;
   std::ofstream file(path);
   if (!file) throw std::runtime_error("cannot write calibration file '" + path + "'");

@@ -173,8 +173,8 @@ class TrackingNode {
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& msg) {
     if (config_.calibration) return;  // the calibration file wins
     try {
-      const geometry::CameraCalibration calibration =
-          ros_conversions::calibrationFromCameraInfo(*msg);
+      geometry::CameraCalibration calibration = ros_conversions::calibrationFromCameraInfo(*msg);
+      calibration.rolling_shutter_readout_s = params_.rolling_shutter_readout_s;
       if (!camera_) {
         setCamera(calibration);
       } else if (!calibration.sameCameraAs(calibration_)) {  // jitter below 0.5 px is ignored

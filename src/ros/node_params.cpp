@@ -210,6 +210,9 @@ void TrackingNodeParams::validate() const {
   check(path_max_poses >= 1, "path_max_poses", "must be >= 1");
   check(std::isfinite(time_jump_restart_s) && time_jump_restart_s >= 0.0, "time_jump_restart_s",
         "must be >= 0");
+  check(std::isfinite(rolling_shutter_readout_s) && rolling_shutter_readout_s >= 0.0 &&
+            rolling_shutter_readout_s <= 1.0,
+        "rolling_shutter_readout_s", "must be in [0, 1] seconds (0: the calibration's)");
   check(std::isfinite(camera_mount_wait_s) && camera_mount_wait_s >= 0.0, "camera_mount_wait_s",
         "must be >= 0");
   check(std::isfinite(odom_tf_timeout_s) && odom_tf_timeout_s >= 0.0, "odom_tf_timeout_s",
@@ -288,6 +291,7 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   TrackingNodeParams& p = config.node;
   reader.read("config", &p.config_file);
   reader.read("calibration_file", &p.calibration_file);
+  reader.read("rolling_shutter_readout_s", &p.rolling_shutter_readout_s);
   reader.read("transport", &p.transport);
   reader.read("image_queue_size", &p.image_queue_size);
   reader.read("keyframe_publish_queue_size", &p.keyframe_publish_queue_size);
@@ -310,6 +314,9 @@ TrackingNodeConfig trackingNodeConfig(const XmlRpc::XmlRpcValue& private_params)
   if (!p.calibration_file.empty()) {
     try {
       config.calibration = io::loadCalibrationYaml(p.calibration_file);
+      if (p.rolling_shutter_readout_s > 0.0) {
+        config.calibration->rolling_shutter_readout_s = p.rolling_shutter_readout_s;
+      }
     } catch (const std::exception& e) {
       fail("calibration_file", e.what());
     }
@@ -391,6 +398,7 @@ std::string describe(const TrackingNodeConfig& c) {
       << "\npath_publish_every: " << p.path_publish_every
       << "\npath_max_poses: " << p.path_max_poses
       << "\ntime_jump_restart_s: " << p.time_jump_restart_s
+      << "\nrolling_shutter_readout_s: " << p.rolling_shutter_readout_s
       << "\nmap_file: " << (p.map_file.empty() ? "(none: a new map)" : p.map_file)
       << "\nlocalization_only: " << p.localization_only << "\n# SLAM parameters\n"
       << io::formatSlamParams(c.slam);

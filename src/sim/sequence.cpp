@@ -68,6 +68,7 @@ void SequenceParams::validate() const {
 geometry::CameraCalibration sequenceCalibration(const SequenceParams& params,
                                                 double default_fov_deg) {
   geometry::CameraCalibration c;
+  c.rolling_shutter_readout_s = params.realism.rolling_shutter;  // rows rendered as it says
   c.width = params.width;
   c.height = params.height;
   c.cx = (params.width - 1) / 2.0;

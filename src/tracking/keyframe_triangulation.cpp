@@ -263,7 +263,11 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     if (!refined[k]) continue;
     const auto [i, j] = pairs[k];
-    const Eigen::Vector2d xy_other = camera.undistortToNormalized(*refined[k]);
+    // `camera` measures the current frame; the other keyframe's own (a rolling shutter's turn
+    // of that frame) went into other.xy: the difference at the matched corner moves the
+    // refined pixel's ray into it (0 for a global shutter).
+    const Eigen::Vector2d xy_other = camera.undistortToNormalized(*refined[k]) +
+                                     (other.xy[j] - camera.undistortToNormalized(other.px[j]));
     const std::optional<Eigen::Vector3d> p =
         triangulateMidpoint(T_cur_world, current.xy[i], T_other_world, xy_other);
     if (!p) continue;

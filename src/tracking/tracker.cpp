@@ -101,6 +101,7 @@ double narrowestFieldOfView(const geometry::CameraModel& camera) {
 
 Tracker::Tracker(std::shared_ptr<const geometry::CameraModel> camera, const TrackerParams& params)
     : camera_(std::move(camera)),
+      frame_camera_(camera_),
       params_(params),
       focal_(camera_ ? camera_->calibration().meanFocalLength() : 0.0),
       field_of_view_(camera_ ? narrowestFieldOfView(*camera_) : 0.0),
@@ -363,6 +364,7 @@ map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3
 
 void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
                          FrameResult* result) {
+  frame_camera_ = camera_;  // no motion known yet: measured as a global shutter
   std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
   result->message = initializer_.status();
   if (!initial) return;
@@ -394,6 +396,7 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
   state_ = TrackingState::kGood;
   T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
   previous_image_ = image;
+  previous_timestamp_ = timestamp;
   last_scene_depth_ = sceneDepth(initial->T_second_first);
   // The second keyframe's free corners wait for the next keyframe to be matched with.
   std::vector<Eigen::Vector2d> taken = occupied;

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <unordered_set>
 
+#include <Eigen/Geometry>
+
 #include "scale_drift_slam/common/stopwatch.h"
+#include "scale_drift_slam/geometry/rolling_shutter_camera.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::tracking {
@@ -16,21 +19,47 @@ double inlierShare(const FrameResult& result) {
   return found > 0 ? static_cast<double>(result.num_inliers) / found : 0.0;
 }
 
+/// The camera that measures a frame taken while the camera moved by T_cur_prev in `interval`
+/// seconds (geometry::frameCamera): `camera` itself for a global shutter or without a positive
+/// interval.
+std::shared_ptr<const geometry::CameraModel> movingCamera(
+    const std::shared_ptr<const geometry::CameraModel>& camera, const geometry::SE3& T_cur_prev,
+    double interval, double scene_depth) {
+  if (!(interval > 0.0)) return camera;
+  const Eigen::AngleAxisd turn(T_cur_prev.rotation());
+  return geometry::frameCamera(camera, turn.angle() / interval * turn.axis(),
+                               T_cur_prev.translation() / interval, scene_depth);
+}
+
 }  // namespace
 
 void Tracker::track(double timestamp, const features::ImagePyramid& image, FrameResult* result) {
   common::Stopwatch stage;
   // 1. Motion prior: flow from the previous frame (its map points and the feature candidates).
+  // A rolling shutter's rows are measured from the camera turning as the constant-velocity
+  // model says, then as the prior says (nothing to do for a global shutter: frame_camera_ is
+  // camera_).
+  const double frame_interval = timestamp - previous_timestamp_;
+  frame_camera_ = movingCamera(camera_,
+                               state_ == TrackingState::kLost
+                                   ? geometry::SE3()
+                                   : T_previous_world_ * T_before_previous_world_.inverse(),
+                               frame_interval, last_scene_depth_);
   std::vector<cv::Point2f> candidate_px;
   std::vector<unsigned char> candidate_ok;
   const MotionPrior prior = estimatePrior(image, &candidate_px, &candidate_ok);
+  if (prior.from_flow) {
+    frame_camera_ = movingCamera(camera_, prior.T_cur_world * T_previous_world_.inverse(),
+                                 frame_interval, last_scene_depth_);
+  }
   result->times.flow = stage.lapMs();
   // 2-3. Active search for the local map points around the prior.
   std::vector<map::PointId> ids;
   const std::vector<features::SearchPoint> search_points = localSearchPoints(prior, &ids);
   const features::CornerGrid corners = features::detectSearchCorners(image, params_.search);
-  std::vector<features::SearchMatch> matches = features::activeSearch(
-      search_points, prior.T_cur_world, prior.Sigma, *camera_, image, corners, params_.search);
+  std::vector<features::SearchMatch> matches =
+      features::activeSearch(search_points, prior.T_cur_world, prior.Sigma, *frame_camera_, image,
+                             corners, params_.search);
   result->times.search = stage.lapMs();
   // 4. Motion-only BA on the matches (pseudo-Huber), starting at the prior.
   std::vector<Measurement> inliers;
@@ -59,12 +88,13 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   result->times.motion_ba = stage.lapMs();
 
   previous_image_ = image;
+  previous_timestamp_ = timestamp;
   const bool from_relocalisation = resume_from_relocalisation_;
   resume_from_relocalisation_ = false;
   if (result->num_inliers < params_.min_inliers) {
     // Lost: say so, keep the last pose, add no keyframe. The filters cannot be updated without
     // a pose, but their pixels follow the flow into this image (the next flow starts from it).
-    candidates_.follow(candidate_px, candidate_ok, *camera_);
+    candidates_.follow(candidate_px, candidate_ok, *frame_camera_);
     state_ = TrackingState::kLost;
     previous_measurements_.clear();
     result->message = "lost: " + std::to_string(result->num_inliers) + " inliers of " +
@@ -93,7 +123,7 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
   result->has_pose = true;
   result->T_cam_world = T_cam_world;
   // 5. Inverse-depth filters of the new features, with the flow's measurements.
-  candidates_.update(candidate_px, candidate_ok, T_cam_world, *camera_);
+  candidates_.update(candidate_px, candidate_ok, T_cam_world, *frame_camera_);
   result->times.filters = stage.lapMs();
   // 6. The keyframe rule (tracking is good or weak here, not lost); none when only localising.
   if (localization_only_) return;
@@ -128,7 +158,7 @@ MotionPrior Tracker::estimatePrior(const features::ImagePyramid& image,
     }
   }
   return motion_prior_.estimate(previous_image_, image, seeds, candidates_.pixels(), T_guess,
-                                T_previous_world_, last_scene_depth_, *camera_, candidate_px,
+                                T_previous_world_, last_scene_depth_, *frame_camera_, candidate_px,
                                 candidate_ok);
 }
 
@@ -181,7 +211,7 @@ void Tracker::researchMissed(const geometry::SE3& T_cam_world, const std::vector
   d << Eigen::Vector3d::Constant(std::pow(params_.motion_prior.min_rotation_sigma, 2)),
       Eigen::Vector3d::Constant(std::pow(params_.motion_prior.min_translation_sigma * depth, 2));
   const std::vector<features::SearchMatch> found_again = features::activeSearch(
-      again, T_cam_world, d.asDiagonal(), *camera_, image, corners, params_.search);
+      again, T_cam_world, d.asDiagonal(), *frame_camera_, image, corners, params_.search);
   int recovered = 0;
   for (std::size_t k = 0; k < missed.size(); ++k) {
     if (!found_again[k].found) continue;
@@ -250,7 +280,7 @@ std::vector<Tracker::Measurement> Tracker::refusedMatches(
   for (std::size_t i = 0; i < matches.size(); ++i) {
     if (!matches[i].found || accepted.count(ids[i]) || !map_.hasPoint(ids[i])) continue;
     const std::optional<Eigen::Vector2d> px =
-        camera_->project(T_cam_world * map_.point(ids[i]).p_world);
+        frame_camera_->project(T_cam_world * map_.point(ids[i]).p_world);
     if (px && (*px - matches[i].px).norm() < max_px)
       refused.push_back({ids[i], matches[i].px, matches[i].xy});
   }
@@ -288,10 +318,11 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
       }
       map_.linkPoint(view.keyframe_id, id);
     }
-    if (const auto px = camera_->project(T_kf_world * feature.p_world)) occupied.push_back(*px);
+    if (const auto px = frame_camera_->project(T_kf_world * feature.p_world))
+      occupied.push_back(*px);
   }
   addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
-  candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *camera_);
+  candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *frame_camera_);
   // Everything the keyframe matched, refused matches included: the ratio rule then compares the
   // frame's inliers with it (on real images, where 30-46 % of the matches are refused, keyframes
   // come sooner; doc/frontend.md, "Refused matches in the keyframe").
@@ -319,7 +350,7 @@ void Tracker::addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& 
     return map_.keyframe(id).T_kf_world;
   };
   for (const TriangulatedPoint& point :
-       triangulation_.addKeyframe(kf_id, T_kf_world, image, taken, *camera_, pose_of)) {
+       triangulation_.addKeyframe(kf_id, T_kf_world, image, taken, *frame_camera_, pose_of)) {
     features::PointAppearance appearance;
     if (!appearance.cut(image, point.px)) continue;
     const map::PointId id = addNewPoint(point.p_world, kf_id, std::move(appearance), message);

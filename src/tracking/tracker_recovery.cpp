@@ -20,7 +20,8 @@ void Tracker::rememberKeyframePoints(const map::KeyframeMessage& message,
   if (!params_.recover_from_keyframe) return;
   keyframe_points_.image = image.base();  // shared, not copied
   for (const map::Observation& o : message.keyframe.observations) {
-    const std::optional<Eigen::Vector2d> px = camera_->project(o.xyd().homogeneous());  // measured
+    const std::optional<Eigen::Vector2d> px =
+        frame_camera_->project(o.xyd().homogeneous());  // measured
     if (!px) continue;
     cv::KeyPoint corner(static_cast<float>(px->x()), static_cast<float>(px->y()), 31.0f);
     corner.class_id = static_cast<int>(keyframe_points_.ids.size());
@@ -73,7 +74,7 @@ std::optional<geometry::SE3> Tracker::poseFromDescribedPoints(const DescribedPoi
     if (match[i] < 0 || !map_.hasPoint(points.ids[i])) continue;
     const Eigen::Vector3d& p = map_.point(points.ids[i]).p_world;
     const cv::Point2f& px = frame.keypoints[match[i]].pt;
-    const Eigen::Vector2d xy = camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y));
+    const Eigen::Vector2d xy = frame_camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y));
     object.emplace_back(p.x(), p.y(), p.z());
     normalised.emplace_back(xy.x(), xy.y());
     input.observations.push_back({p, xy});
@@ -122,7 +123,7 @@ void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,
   if (!enough(keyframe_points_.ids.size()) && !from_previous) return;
   FrameCorners frame;
   frame.keypoints = features::distributeQuadtree(corners.corners(), kRecoveryCorners,
-                                                 camera_->width(), camera_->height());
+                                                 frame_camera_->width(), frame_camera_->height());
   frame.descriptors = describeCorners(image.base(), &frame.keypoints);
   const bool recovered =
       tryPoseFrom(poseFromDescribedPoints(keyframe_points_, frame), image, corners, ids,
@@ -149,7 +150,7 @@ bool Tracker::tryPoseFrom(const std::optional<geometry::SE3>& T_pnp,
       Eigen::Vector3d::Constant(
           std::pow(k * params_.motion_prior.min_translation_sigma * depth, 2));
   std::vector<features::SearchMatch> found = features::activeSearch(
-      search_points, *T_pnp, d.asDiagonal(), *camera_, image, corners, params_.search);
+      search_points, *T_pnp, d.asDiagonal(), *frame_camera_, image, corners, params_.search);
   std::vector<Measurement> more_inliers;
   FrameResult counts;
   const geometry::SE3 T = solvePose(*T_pnp, ids, found, &more_inliers, &counts);

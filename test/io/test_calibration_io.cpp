@@ -86,6 +86,32 @@ TEST(CalibrationYaml, SaveThenLoadIsExact) {
   EXPECT_EQ(loaded.fx, c.fx);
   EXPECT_EQ(loaded.cy, c.cy);
   EXPECT_EQ(loaded.distortion, c.distortion);
+  EXPECT_EQ(loaded.rolling_shutter_readout_s, 0.0);
+  c.rolling_shutter_readout_s = 0.0213;  // a rolling shutter's readout is kept too
+  saveCalibrationYaml(c, path);
+  EXPECT_EQ(loadCalibrationYaml(path).rolling_shutter_readout_s, 0.0213);
+}
+
+// No layout has a key for a rolling shutter's readout time: every one accepts ours.
+TEST(CalibrationYaml, EveryLayoutTakesARollingShutterReadout) {
+  EXPECT_EQ(parseCalibrationYaml("width: 640\nheight: 480\nfx: 500\nfy: 500\ncx: 320\ncy: 240\n"
+                                 "rolling_shutter_readout_s: 0.03\n")
+                .rolling_shutter_readout_s,
+            0.03);
+  EXPECT_EQ(parseCalibrationYaml("sensor_type: camera\nresolution: [752, 480]\n"
+                                 "intrinsics: [458.6, 457.3, 367.2, 248.4]\n"
+                                 "distortion_coefficients: [0, 0, 0, 0]\n"
+                                 "rolling_shutter_readout_s: 0.015\n")
+                .rolling_shutter_readout_s,
+            0.015);
+  expectFailure(
+      "width: 640\nheight: 480\nfx: 500\nfy: 500\ncx: 320\ncy: 240\n"
+      "rolling_shutter_readout_s: -0.03\n",
+      "rolling_shutter_readout_s");
+  expectFailure(
+      "width: 640\nheight: 480\nfx: 500\nfy: 500\ncx: 320\ncy: 240\n"
+      "rolling_shutter_readout: 0.03\n",
+      "did you mean 'rolling_shutter_readout_s'");
 }
 
 TEST(CalibrationYaml, BrokenFilesFailWithTheReason) {

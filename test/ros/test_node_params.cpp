@@ -223,6 +223,24 @@ TEST(NodeParams, BadValuesNameTheParameter) {
   EXPECT_NE(mapping_error(p).find("~marker_scale"), std::string::npos) << mapping_error(p);
 }
 
+// CameraInfo has no field for a rolling shutter's readout: the parameter sets it, also over a
+// calibration file's; an impossible one is refused naming it.
+TEST(NodeParams, RollingShutterReadout) {
+  EXPECT_EQ(trackingNodeConfig(emptyStruct()).node.rolling_shutter_readout_s, 0.0);
+  XmlRpcValue p = emptyStruct();
+  p["rolling_shutter_readout_s"] = 0.025;
+  EXPECT_EQ(trackingNodeConfig(p).node.rolling_shutter_readout_s, 0.025);
+  p["calibration_file"] = writeFile("sds_rolling_shutter.yaml",
+                                    "width: 640\nheight: 480\nfx: 500\nfy: 500\ncx: 320\n"
+                                    "cy: 240\nrolling_shutter_readout_s: 0.01\n");
+  EXPECT_EQ(trackingNodeConfig(p).calibration->rolling_shutter_readout_s, 0.025);
+  p["rolling_shutter_readout_s"] = 0.0;  // the file's own
+  EXPECT_EQ(trackingNodeConfig(p).calibration->rolling_shutter_readout_s, 0.01);
+  p["rolling_shutter_readout_s"] = -0.02;
+  EXPECT_NE(errorOf([&] { trackingNodeConfig(p); }).find("~rolling_shutter_readout_s"),
+            std::string::npos);
+}
+
 TEST(NodeParams, RobotFrames) {
   const TrackingNodeParams defaults = trackingNodeConfig(emptyStruct()).node;
   EXPECT_EQ(defaults.frames.base, "base_link");

@@ -30,12 +30,18 @@ struct CameraCalibration {
   int width = 0;
   int height = 0;
   std::vector<double> distortion;  ///< Coefficients in the order of the model (above).
+  /// A rolling shutter's readout time (s): row y is exposed at the frame's time plus
+  /// readout x ((y + 0.5) / height - 0.5), so the stamp is the middle row's. 0: a global
+  /// shutter. The tracker then measures each row from the pose at its own time
+  /// (geometry/rolling_shutter_camera.h).
+  double rolling_shutter_readout_s = 0.0;
 
   /// Throws std::invalid_argument with the reason when the calibration cannot be used: a
   /// non-positive or non-finite focal length or one above 100x the image size, a principal
   /// point far off the image (more than one image size outside it), a non-positive image size
   /// or one above 100000, the wrong number of coefficients or a non-finite coefficient or one
-  /// above 1000 in magnitude.
+  /// above 1000 in magnitude, a rolling-shutter readout time that is negative, not finite or
+  /// above 1 s.
   void validate() const;
   /// One line for logs: "plumb_bob 640x480 fx=.. fy=.. cx=.. cy=.. d=[..]".
   std::string describe() const;
@@ -45,7 +51,8 @@ struct CameraCalibration {
   /// The same camera up to the jitter of a calibration republished with rounding or refined
   /// online: same model and size, every pixel of the image mapped within `tolerance_px` (focal
   /// lengths and principal point within tolerance_px over the half image; coefficients within
-  /// tolerance_px / half diagonal in pixels).
+  /// tolerance_px / half diagonal in pixels). The rolling-shutter readout is not compared: it
+  /// times the rows and leaves the geometry, and a map made with one camera serves the other.
   bool sameCameraAs(const CameraCalibration& other, double tolerance_px = 0.5) const;
 };
 

@@ -6,6 +6,8 @@
 //     distortion_model, distortion_coefficients: {data: [..]}
 //   - EuRoC / Kalibr sensor.yaml: resolution: [w, h], intrinsics: [fu, fv, cu, cv],
 //     distortion_model, distortion_coefficients: [..]
+// Each may add rolling_shutter_readout_s: a rolling shutter's readout time in seconds (first to
+// last row; 0 or absent: a global shutter).
 
 #include <string>
 

@@ -31,8 +31,11 @@ struct FrameNames {
 
 /// tracking_node's own settings.
 struct TrackingNodeParams {
-  std::string config_file;        ///< SLAM parameters YAML; empty: the defaults.
-  std::string calibration_file;   ///< Calibration YAML; empty: from CameraInfo.
+  std::string config_file;       ///< SLAM parameters YAML; empty: the defaults.
+  std::string calibration_file;  ///< Calibration YAML; empty: from CameraInfo.
+  /// A rolling shutter's readout time (s), which CameraInfo cannot carry; > 0 sets it on the
+  /// calibration, whichever its source (a calibration file may hold its own).
+  double rolling_shutter_readout_s = 0.0;
   std::string transport = "raw";  ///< raw, compressed, or another installed image_transport plugin.
   int image_queue_size = 5;       ///< Images waiting while a frame is tracked (older are dropped).
   /// Keyframes roscpp keeps per subscriber while its connection stalls (a link outage: the

@@ -265,6 +265,9 @@ class Tracker {
   void restartYoungLostMap(FrameResult* result);
 
   std::shared_ptr<const geometry::CameraModel> camera_;
+  /// The camera that measures the frame being tracked: camera_, or with a rolling shutter
+  /// camera_ turning at the frame's rotation rate (geometry/rolling_shutter_camera.h).
+  std::shared_ptr<const geometry::CameraModel> frame_camera_;
   TrackerParams params_;
   double focal_;
   double field_of_view_;  ///< The narrowest angular extent of the image (rad), for keyframes.
@@ -285,6 +288,7 @@ class Tracker {
   TrackingState state_ = TrackingState::kInitializing;
 
   features::ImagePyramid previous_image_;
+  double previous_timestamp_ = 0.0;  ///< Of previous_image_.
   geometry::SE3 T_previous_world_, T_before_previous_world_;
   std::vector<Measurement> previous_measurements_;
   double last_scene_depth_ = 1.0;
