@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
+#include "scale_drift_slam/geometry/so3.h"
 
 namespace scale_drift_slam::geometry {
 
@@ -28,10 +28,7 @@ double RollingShutterCamera::rowTime(double y) const {
 }
 
 Eigen::Matrix3d RollingShutterCamera::rotationAt(double tau) const {
-  const Eigen::Vector3d angle_axis = tau * rotation_rate_;
-  const double angle = angle_axis.norm();
-  if (angle < 1e-12) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(angle, angle_axis / angle).toRotationMatrix();
+  return expSO3Matrix<double>(tau * rotation_rate_);
 }
 
 Eigen::Vector3d RollingShutterCamera::pointAt(double tau, const Eigen::Vector3d& p_cam) const {

@@ -4,10 +4,9 @@
 #include <cmath>
 #include <unordered_set>
 
-#include <Eigen/Geometry>
-
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/geometry/rolling_shutter_camera.h"
+#include "scale_drift_slam/geometry/so3.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
 namespace scale_drift_slam::tracking {
@@ -26,8 +25,7 @@ std::shared_ptr<const geometry::CameraModel> movingCamera(
     const std::shared_ptr<const geometry::CameraModel>& camera, const geometry::SE3& T_cur_prev,
     double interval, double scene_depth) {
   if (!(interval > 0.0)) return camera;
-  const Eigen::AngleAxisd turn(T_cur_prev.rotation());
-  return geometry::frameCamera(camera, turn.angle() / interval * turn.axis(),
+  return geometry::frameCamera(camera, geometry::logSO3(T_cur_prev.rotation()) / interval,
                                T_cur_prev.translation() / interval, scene_depth);
 }
 

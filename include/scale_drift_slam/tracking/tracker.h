@@ -266,7 +266,7 @@ class Tracker {
 
   std::shared_ptr<const geometry::CameraModel> camera_;
   /// The camera that measures the frame being tracked: camera_, or with a rolling shutter
-  /// camera_ turning at the frame's rotation rate (geometry/rolling_shutter_camera.h).
+  /// camera_ moving as the frame's motion says (geometry/rolling_shutter_camera.h).
   std::shared_ptr<const geometry::CameraModel> frame_camera_;
   TrackerParams params_;
   double focal_;
