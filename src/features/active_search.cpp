@@ -1,7 +1,5 @@
 #include "scale_drift_slam/features/active_search.h"
 
-#include "scale_drift_slam/features/fixed_point_ncc.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,6 +7,8 @@
 #include <string>
 
 #include <Eigen/LU>
+
+#include "scale_drift_slam/features/fixed_point_ncc.h"
 
 namespace scale_drift_slam::features {
 

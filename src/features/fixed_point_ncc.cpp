@@ -14,6 +14,8 @@ bool FixedPointTemplate::set(const std::vector<float>& samples, int radius) {
   }
   values_.clear();
   radius_ = radius;
+  for (int i = 0; i < kRowStride; ++i)
+    in_patch_[i] = i <= 2 * radius ? -1 : 0;
   double sum = 0.0;
   for (const float v : samples)
     sum += v;
@@ -69,11 +71,8 @@ double FixedPointTemplate::score(const cv::Mat& image, int x, int y) const {
   }
   // A row's 16 lanes hold pixels 0..15 from its first pixel; only those up to 2r belong to
   // the patch (the template is zero past them, the pixels are masked).
-  alignas(16) std::int16_t in_patch[16];
-  for (int i = 0; i < 16; ++i)
-    in_patch[i] = i <= 2 * r ? -1 : 0;
-  const cv::v_int16x8 low_mask = cv::v_load_aligned(in_patch);
-  const cv::v_int16x8 high_mask = cv::v_load_aligned(in_patch + 8);
+  const cv::v_int16x8 low_mask = cv::v_load_aligned(in_patch_.data());
+  const cv::v_int16x8 high_mask = cv::v_load_aligned(in_patch_.data() + 8);
   cv::v_int32x4 sum_tb = cv::v_setzero_s32(), sum_bb = cv::v_setzero_s32();
   cv::v_int16x8 sum_b = cv::v_setzero_s16();  // <= 15 rows * 2 * 255 per lane
   for (int dy = -r; dy <= r; ++dy) {

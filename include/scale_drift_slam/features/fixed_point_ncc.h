@@ -4,6 +4,7 @@
 // frame), so it is written for SIMD (OpenCV's universal intrinsics), with a scalar path that
 // gives the same integers.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -37,6 +38,8 @@ class FixedPointTemplate {
 
   int radius_ = 0;
   std::vector<std::int16_t> values_;  ///< (2r+1) rows of kRowStride, zero past column 2r
+  /// -1 in the lanes of a row's columns 0..2r, 0 past them: masks the pixels read with a row.
+  alignas(16) std::array<std::int16_t, kRowStride> in_patch_{};
 };
 
 }  // namespace scale_drift_slam::features
