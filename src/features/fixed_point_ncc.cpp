@@ -28,8 +28,10 @@ bool FixedPointTemplate::set(const std::vector<float>& samples, int radius) {
   values_.assign(static_cast<std::size_t>(side) * kRowStride, 0);
   for (int row = 0; row < side; ++row) {
     for (int col = 0; col < side; ++col) {
-      values_[row * kRowStride + col] =
-          static_cast<std::int16_t>(std::lround((samples[row * side + col] - mean) * scale));
+      // Rounded half away from zero, as std::lround, which is a library call.
+      const double v = (samples[row * side + col] - mean) * scale;
+      values_[row * kRowStride + col] = static_cast<std::int16_t>(
+          v >= 0.0 ? static_cast<int>(v + 0.5) : -static_cast<int>(0.5 - v));
     }
   }
   return true;

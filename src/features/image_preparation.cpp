@@ -226,14 +226,19 @@ double stretchContrast(cv::Mat* grey, double target_range, double max_gain) {
   if (!(target_range > 0.0 && target_range <= 255.0) || !(max_gain >= 1.0)) {
     throw std::invalid_argument("contrast stretch needs target_range in (0, 255], max_gain >= 1");
   }
+  // The histogram of every second pixel of every second row (a quarter of the work; every frame
+  // pays it): percentiles of 19 000 samples at 240x180, 110 000 at KITTI's size.
   int histogram[256] = {0};
-  for (int r = 0; r < grey->rows; ++r) {
+  int samples = 0;
+  for (int r = 0; r < grey->rows; r += 2) {
     const unsigned char* row = grey->ptr<unsigned char>(r);
-    for (int c = 0; c < grey->cols; ++c)
+    for (int c = 0; c < grey->cols; c += 2) {
       ++histogram[row[c]];
+      ++samples;
+    }
   }
   // The 1st and 99th percentiles: a few hot or dead pixels do not count as contrast.
-  const double total = static_cast<double>(grey->total());
+  const double total = static_cast<double>(samples);
   double below = 0.0;
   int low = 0, high = 255;
   for (int v = 0; v < 256; ++v) {
