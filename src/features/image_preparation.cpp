@@ -227,7 +227,7 @@ double stretchContrast(cv::Mat* grey, double target_range, double max_gain) {
     throw std::invalid_argument("contrast stretch needs target_range in (0, 255], max_gain >= 1");
   }
   // The histogram of every second pixel of every second row (a quarter of the work; every frame
-  // pays it): percentiles of 19 000 samples at 240x180, 110 000 at KITTI's size.
+  // pays it): percentiles of 10 800 samples at 240x180, 113 000 at KITTI's size.
   int histogram[256] = {0};
   int samples = 0;
   for (int r = 0; r < grey->rows; r += 2) {
