@@ -53,6 +53,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "restart_below_keyframes", &t.restart_below_keyframes},
       {"tracker", "recover_from_keyframe", &t.recover_from_keyframe},
       {"tracker", "recover_on_inlier_share_drop", &t.recover_on_inlier_share_drop},
+      {"tracker", "recover_on_inlier_drop", &t.recover_on_inlier_drop},
       {"tracker", "recovery_max_descriptor_distance", &t.recovery_max_descriptor_distance},
       {"tracker", "recovery_max_ratio", &t.recovery_max_ratio},
       {"tracker", "keyframe_refused_matches_px", &t.keyframe_refused_matches_px},

@@ -40,6 +40,9 @@ void TrackerParams::validate() const {
   if (!(recover_on_inlier_share_drop >= 0.0 && recover_on_inlier_share_drop <= 1.0)) {
     throw std::invalid_argument("tracker.recover_on_inlier_share_drop must be in [0, 1]");
   }
+  if (!(recover_on_inlier_drop >= 0.0 && recover_on_inlier_drop <= 1.0)) {
+    throw std::invalid_argument("tracker.recover_on_inlier_drop must be in [0, 1]");
+  }
   if (!(keyframe_refused_matches_px >= 0.0) || !std::isfinite(keyframe_refused_matches_px)) {
     throw std::invalid_argument("tracker.keyframe_refused_matches_px must be finite and >= 0");
   }

@@ -70,15 +70,18 @@ void Tracker::track(double timestamp, const features::ImagePyramid& image, Frame
     researchMissed(T_cam_world, ids, search_points, image, corners, &matches, &inliers,
                    &T_cam_world, result);
   }
-  // Few inliers, or a share of inliers among the points found fallen far below its recent
-  // average (a pose from a wrong prior, points matched onto the wrong texture: the share is
-  // ~0.95 on renders, 0.5-0.7 on real images, and a wrong pose halves it): the frame is tried
-  // again from the newest keyframe's points.
+  // Few inliers, a share of inliers among the points found fallen far below its recent average
+  // (a pose from a wrong prior, points matched onto the wrong texture: the share is ~0.95 on
+  // renders, 0.5-0.7 on real images, and a wrong pose halves it), or far fewer inliers than the
+  // frame before: the frame is tried again from the newest keyframe's points.
   const bool share_dropped =
       inlier_share_average_ > 0.0 &&
       inlierShare(*result) < params_.recover_on_inlier_share_drop * inlier_share_average_;
+  const bool inliers_dropped =
+      result->num_inliers <
+      params_.recover_on_inlier_drop * static_cast<double>(previous_measurements_.size());
   if (params_.recover_from_keyframe &&
-      (result->num_inliers < params_.good_inliers || share_dropped)) {
+      (result->num_inliers < params_.good_inliers || share_dropped || inliers_dropped)) {
     recoverFromKeyframe(image, corners, ids, search_points, &matches, &inliers, &T_cam_world,
                         result);
   }
