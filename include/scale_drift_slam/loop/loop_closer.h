@@ -97,9 +97,11 @@ class LoopCloser {
   const LoopCloserParams& params() const { return params_; }
 
  private:
-  /// verification view of a stored keyframe (its image decoded) or of a new one.
+  /// verification view of a stored keyframe (its image decoded) or of a new one: its own map
+  /// points; `with_covisible_points` adds those of its co-visible keyframes that project into
+  /// its image (a loop candidate's neighbourhood).
   VerificationView viewOf(map::KeyframeId id, const KeyframeAppearance& features,
-                          const cv::Mat& image) const;
+                          const cv::Mat& image, bool with_covisible_points = false) const;
   void storeKeyframe(const map::KeyframeMessage& message);
   std::unordered_set<map::KeyframeId> covisibleKeyframes(map::KeyframeId id) const;
   cv::Mat storedImage(map::KeyframeId id) const;
