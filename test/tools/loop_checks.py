@@ -2,8 +2,11 @@
 """Checks of loop closure runs against the rendered ground truth, shared by the tool tests.
 
   loop_checks.py loops SUMMARY GROUNDTRUTH [--max-distance M]
-      every loop in run_sequence's summary.json joins two keyframes whose true camera centres are
-      within M metres (default 3) and whose optical axes are within 30 degrees: a true loop.
+      every loop in run_sequence's summary.json is a true loop: it joins two keyframes whose true
+      camera centres are within M metres (default 3) and whose optical axes are within 30
+      degrees, and the relative pose it measured (S_current_loop) is the true one: its rotation
+      within 3 degrees, and where the centres are over 1 m apart the direction from one to the
+      other within 20 degrees (a loop onto a look-alike place gets that geometry wrong).
   loop_checks.py scale SUMMARY GROUNDTRUTH [--keyframes K] [--tolerance F]
       the relative scale measured at each loop is within F (default 0.05) of the drift the map
       really had just before that loop's correction (run_sequence writes those keyframes beside
@@ -34,6 +37,33 @@ def optical_axis(pose):
     return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
 
 
+def rotation(pose):
+    """Rotation matrix of a TUM row's (or S_current_loop's) quaternion qx qy qz qw."""
+    x, y, z, w = pose
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def angle_deg(a, b):
+    return np.degrees(np.arccos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
+
+
+def relative_pose_errors(loop, a, b):
+    """Rotation error (degrees) of the measured S_current_loop against the true T_current_loop,
+    and the angle between the measured and the true loop-keyframe centre seen from the current
+    keyframe (degrees). a, b: the true poses (TUM rows, camera to world) of the current and the
+    loop keyframe."""
+    S = loop["S_current_loop"]  # qx qy qz qw tx ty tz log-scale: x_current = S x_loop
+    R_cw, R_lw = rotation(a[4:8]).T, rotation(b[4:8]).T
+    R_true = R_cw @ R_lw.T
+    cos = (np.trace(rotation(S[0:4]).T @ R_true) - 1) / 2
+    rotation_error = np.degrees(np.arccos(np.clip(cos, -1, 1)))
+    # The loop camera's centre in the current camera: measured S (0) = t, true R_cw (c_l - c_c).
+    direction_error = angle_deg(np.array(S[4:7]), R_cw @ (b[1:4] - a[1:4]))
+    return rotation_error, direction_error
+
+
 def local_scale(estimate, truth):
     """Estimate units per metre over the poses `estimate`: the spread of the estimated centres
     about their mean divided by the spread of the true ones (Umeyama's scale for a rigid fit)."""
@@ -58,10 +88,15 @@ def main():
             a, b = nearest(truth, loop["current_stamp"]), nearest(truth, loop["loop_stamp"])
             distance = np.linalg.norm(a[1:4] - b[1:4])
             angle = np.degrees(np.arccos(np.clip(optical_axis(a) @ optical_axis(b), -1, 1)))
-            print("loop %d -> %d: true distance %.2f m, view angle %.1f deg"
-                  % (loop["current_keyframe"], loop["loop_keyframe"], distance, angle))
+            rotation_error, direction_error = relative_pose_errors(loop, a, b)
+            print("loop %d -> %d: true distance %.2f m, view angle %.1f deg; measured relative "
+                  "pose: rotation error %.2f deg, direction error %.1f deg"
+                  % (loop["current_keyframe"], loop["loop_keyframe"], distance, angle,
+                     rotation_error, direction_error))
             if distance > limit or angle > 30:
-                raise SystemExit("FAIL: a false loop was accepted")
+                raise SystemExit("FAIL: a false loop was accepted (too far apart)")
+            if rotation_error > 3 or (distance > 1 and direction_error > 20):
+                raise SystemExit("FAIL: the loop's relative pose is not the true one")
     elif mode == "scale":
         count, tolerance = int(option("--keyframes", 8)), option("--tolerance", 0.05)
         folder = os.path.dirname(os.path.abspath(sys.argv[2]))
