@@ -188,8 +188,9 @@ std::vector<cv::KeyPoint> detectSpreadCorners(const ImagePyramid& image, int max
   return spreadCorners(image.corners().get(), image.base().size(), max_features, params, occupied);
 }
 
-CornerGrid::CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size)
-    : corners_(std::move(corners)), cell_size_(std::max(cell_size, 1)) {
+CornerGrid::CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size,
+                       int level)
+    : corners_(std::move(corners)), level_(level), cell_size_(std::max(cell_size, 1)) {
   cols_ = std::max(1, (width + cell_size_ - 1) / cell_size_);
   rows_ = std::max(1, (height + cell_size_ - 1) / cell_size_);
   cells_.resize(static_cast<std::size_t>(cols_) * rows_);

@@ -107,6 +107,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"search", "max_scale_change", &t.search.max_scale_change},
       {"search", "max_view_angle_deg", &t.search.max_view_angle_deg},
       {"search", "max_points", &t.search.max_points},
+      {"search", "min_coarse_corner_density", &t.search.min_coarse_corner_density},
       {"motion_ba", "huber_width_px", &t.motion_ba.huber_width_px},
       {"motion_ba", "inlier_threshold_px", &t.motion_ba.inlier_threshold_px},
       {"motion_ba", "max_iterations", &t.motion_ba.max_iterations},

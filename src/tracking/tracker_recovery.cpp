@@ -122,8 +122,10 @@ void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,
                              keyframe_points_.frame_index + 1 != frame_index_;
   if (!enough(keyframe_points_.ids.size()) && !from_previous) return;
   FrameCorners frame;
-  frame.keypoints = features::distributeQuadtree(corners.corners(), kRecoveryCorners,
-                                                 frame_camera_->width(), frame_camera_->height());
+  // Described at full resolution: the search corners may be half-resolution seeds.
+  frame.keypoints = features::distributeQuadtree(
+      image.corners()->detect(params_.search.fast_threshold, params_.search.template_radius + 1),
+      kRecoveryCorners, frame_camera_->width(), frame_camera_->height());
   frame.descriptors = describeCorners(image.base(), &frame.keypoints);
   const bool recovered =
       tryPoseFrom(poseFromDescribedPoints(keyframe_points_, frame), image, corners, ids,

@@ -46,18 +46,33 @@ WallScene makeScene(const geometry::SE3& T_cur_world) {
   return s;
 }
 
+/// 20 degrees about the optical axis, 0.6 m closer (scale change 1.25), a little sideways.
+WallScene rotatedCloserView() {
+  const geometry::SE3 T_world_cur(geometry::expSO3(Eigen::Vector3d(0.02, -0.03, 0.35)),
+                                  Eigen::Vector3d(0.1, 0.05, 0.6));
+  return makeScene(T_world_cur.inverse());
+}
+
+/// The current pose off by ~0.01 rad and 2 cm: several pixels.
+geometry::SE3 perturbedPrior(const WallScene& s) {
+  return geometry::SE3::exp(
+             (Eigen::Matrix<double, 6, 1>() << 0.004, -0.006, 0.003, 0.01, -0.01, 0.005)
+                 .finished()) *
+         s.T_cur_world;
+}
+
 struct Outcome {
   int visible = 0, found = 0;
   double median_error_px = 1e9;
 };
 
-Outcome search(const WallScene& s, const geometry::SE3& prior, double sigma) {
+Outcome search(const WallScene& s, const geometry::SE3& prior, double sigma,
+               const ActiveSearchParams& params = {}) {
   const auto cam = camera();
   std::vector<SearchPoint> points;
   for (std::size_t i = 0; i < s.points.size(); ++i) {
     points.push_back({s.points[i], s.T_ref_world, &s.appearances[i]});
   }
-  const ActiveSearchParams params;
   const Eigen::Matrix<double, 6, 6> Sigma = Eigen::Matrix<double, 6, 6>::Identity() * sigma * sigma;
   const auto matches =
       activeSearch(points, prior, Sigma, *cam, s.cur, detectSearchCorners(s.cur, params), params);
@@ -108,15 +123,8 @@ TEST(PointAppearance, HoldsThePixelsAroundThePointAtBothLevels) {
 }
 
 TEST(ActiveSearch, FindsPointsInARotatedCloserView) {
-  // 20 degrees about the optical axis, 0.6 m closer (scale change 1.25), a little sideways.
-  const geometry::SE3 T_world_cur(geometry::expSO3(Eigen::Vector3d(0.02, -0.03, 0.35)),
-                                  Eigen::Vector3d(0.1, 0.05, 0.6));
-  const WallScene s = makeScene(T_world_cur.inverse());
-  // The prior is off by ~0.01 rad and 2 cm: several pixels.
-  const geometry::SE3 prior =
-      geometry::SE3::exp(
-          (Eigen::Matrix<double, 6, 1>() << 0.004, -0.006, 0.003, 0.01, -0.01, 0.005).finished()) *
-      s.T_cur_world;
+  const WallScene s = rotatedCloserView();
+  const geometry::SE3 prior = perturbedPrior(s);
   const Outcome o = search(s, prior, 0.01);
   ASSERT_GT(o.visible, 150);
   EXPECT_GT(o.found, 0.9 * o.visible);
@@ -162,13 +170,8 @@ TEST(PointAppearance, CompressedPatchesKeepHalfThePixelsWithin1Of30OfTheirRange)
 
 TEST(ActiveSearch, CompressedThenExpandedPatchesFindThePointsAsWell) {
   // The rotated, closer view of the test above, searched with patches that were compressed.
-  const geometry::SE3 T_world_cur(geometry::expSO3(Eigen::Vector3d(0.02, -0.03, 0.35)),
-                                  Eigen::Vector3d(0.1, 0.05, 0.6));
-  WallScene s = makeScene(T_world_cur.inverse());
-  const geometry::SE3 prior =
-      geometry::SE3::exp(
-          (Eigen::Matrix<double, 6, 1>() << 0.004, -0.006, 0.003, 0.01, -0.01, 0.005).finished()) *
-      s.T_cur_world;
+  WallScene s = rotatedCloserView();
+  const geometry::SE3 prior = perturbedPrior(s);
   const Outcome full = search(s, prior, 0.01);
   for (PointAppearance& appearance : s.appearances) {
     appearance.compress();
@@ -178,6 +181,30 @@ TEST(ActiveSearch, CompressedThenExpandedPatchesFindThePointsAsWell) {
   ASSERT_GT(quantised.visible, 150);
   EXPECT_GT(quantised.found, 0.95 * full.found);
   EXPECT_LT(quantised.median_error_px, 0.3);
+}
+
+TEST(ActiveSearch, HalfResolutionCornersSeedMatchesAsPreciseAsFullResolutionOnes) {
+  // The rotated, closer view again, searched from the FAST corners of pyramid level 1 (each
+  // within a pixel or two of its full-resolution feature, climbing to the NCC peak) and from
+  // those of level 0.
+  const WallScene s = rotatedCloserView();
+  const geometry::SE3 prior = perturbedPrior(s);
+  ActiveSearchParams coarse, full;
+  coarse.min_coarse_corner_density = 0.0;  // level 1 whatever its corners
+  full.min_coarse_corner_density = 1e9;    // never level 1
+  ASSERT_EQ(detectSearchCorners(s.cur, coarse).level(), 1);
+  ASSERT_EQ(detectSearchCorners(s.cur, full).level(), 0);
+  const Outcome from_level0 = search(s, prior, 0.01, full);
+  const Outcome from_level1 = search(s, prior, 0.01, coarse);
+  ASSERT_GT(from_level1.visible, 150);
+  EXPECT_GE(from_level1.found, 0.9 * from_level0.found);
+  EXPECT_LE(from_level1.median_error_px, from_level0.median_error_px + 0.02);
+  // Level 1's corners are level-0 pixels inside the border the template needs.
+  const CornerGrid coarse_corners = detectSearchCorners(s.cur, coarse);
+  for (const cv::KeyPoint& k : coarse_corners.corners()) {
+    EXPECT_GE(k.pt.x, coarse.template_radius + 1);
+    EXPECT_LT(k.pt.x, s.cur.base().cols - coarse.template_radius - 1);
+  }
 }
 
 TEST(ActiveSearch, DoesNotMatchOutsideTheRegion) {

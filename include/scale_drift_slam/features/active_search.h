@@ -6,6 +6,9 @@
 // into the current view, and match it by normalised cross-correlation (NCC) at the FAST corners
 // inside the region (and at the prediction itself), refined to sub-pixel by a parabola through
 // the NCC scores. Pure functions; called by the tracking thread.
+// The corners may come from the half-resolution level (detectSearchCorners): a corner is then
+// only a seed within a pixel or two of its full-resolution position, and the best seeds climb
+// one pixel at a time to their local NCC maximum before the parabola.
 
 #include <array>
 #include <cstdint>
@@ -32,6 +35,11 @@ struct ActiveSearchParams {
   double max_scale_change = 3.0;     ///< Skip points seen this much larger/smaller than in the ref.
   double max_view_angle_deg = 60.0;  ///< Skip points seen this far off their reference direction.
   int max_points = 300;  ///< Match at most this many visible points, spread over the image.
+  /// The search corners come from pyramid level 1 (a quarter of the pixels to detect in; each
+  /// match then climbs to the NCC peak at full resolution) when level 1 has at least this many
+  /// FAST corners per 1000 pixels of the full-resolution frame; from level 0 otherwise (a frame
+  /// whose texture is too fine or too faint for level 1 keeps every corner).
+  double min_coarse_corner_density = 1.5;
   void validate() const;
 };
 
@@ -111,7 +119,9 @@ std::vector<SearchMatch> activeSearch(const std::vector<SearchPoint>& points,
                                       const ImagePyramid& image, const CornerGrid& corners,
                                       const ActiveSearchParams& params);
 
-/// The FAST corners of a frame for active search, bucketed for region queries.
+/// The FAST corners of a frame for active search, bucketed for region queries, in level-0
+/// pixels: from pyramid level 1 (CornerGrid::level() 1) when it holds at least
+/// params.min_coarse_corner_density corners per 1000 pixels of the frame, else from level 0.
 CornerGrid detectSearchCorners(const ImagePyramid& image, const ActiveSearchParams& params);
 
 /// NCC of two equally sized float patches, in [-1, 1]; -1 when either has no texture.

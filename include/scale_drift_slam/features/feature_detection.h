@@ -65,13 +65,18 @@ std::vector<cv::KeyPoint> distributeQuadtree(const std::vector<cv::KeyPoint>& co
 /// The corners of one frame bucketed into square cells for region queries. Immutable once built.
 class CornerGrid {
  public:
-  CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size = 16);
+  /// `corners` in level-0 pixels, detected at pyramid `level` (0: full resolution; 1: half, each
+  /// corner then within about a pixel of the full-resolution feature).
+  CornerGrid(std::vector<cv::KeyPoint> corners, int width, int height, int cell_size = 16,
+             int level = 0);
   /// Indices of the corners within the axis-aligned box |x - cx| <= rx, |y - cy| <= ry.
   void query(const Eigen::Vector2d& center, double rx, double ry, std::vector<int>* indices) const;
   const std::vector<cv::KeyPoint>& corners() const { return corners_; }
+  int level() const { return level_; }
 
  private:
   std::vector<cv::KeyPoint> corners_;
+  int level_;
   int cell_size_;
   int cols_;
   int rows_;
