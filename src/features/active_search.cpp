@@ -394,8 +394,10 @@ void matchPoint(const SearchPoint& point, const Prediction& prediction,
   const int cy = static_cast<int>(std::lround(predicted.y()));
   const int half_w = static_cast<int>(std::ceil(rx)) + 2,
             half_h = static_cast<int>(std::ceil(ry)) + 2;
-  memo->start(*templ, image, cx - half_w, cy - half_h, 2 * half_w + 1, 2 * half_h + 1);
   const bool coarse = corners.level() > 0;
+  // Without climbing every pixel is scored once anyway: no memo (an empty box).
+  memo->start(*templ, image, cx - half_w, cy - half_h, coarse ? 2 * half_w + 1 : 0,
+              coarse ? 2 * half_h + 1 : 0);
   ScoredPixel best{memo->score(cx, cy), cx, cy};
   corners.query(predicted, rx, ry, candidates);
   seeds->clear();
@@ -419,8 +421,14 @@ void matchPoint(const SearchPoint& point, const Prediction& prediction,
   for (const ScoredPixel& seed : *seeds) {
     if (seed.score > best.score) best = seed;
   }
+  if (best.score < params.min_ncc) {
+    match->ncc = best.score;
+    return;
+  }
+  // A match at the prediction (no corner climbed higher) sits on the slope of its peak where
+  // the prediction fell: refined to the peak before the parabola, which spans half a pixel.
+  if (coarse) climb(memo, in_gate, kClimbSteps, &best);
   match->ncc = best.score;
-  if (best.score < params.min_ncc) return;
   const double dx =
       parabolaPeak(memo->score(best.x - 1, best.y), best.score, memo->score(best.x + 1, best.y));
   const double dy =
