@@ -325,8 +325,9 @@ class ScoreMemo {
 /// is within a pixel or two: the corners scoring best where they land, and every one scoring at
 /// least kClimbFromScore, climb up to kClimbSteps one-pixel steps to a local NCC maximum
 /// (4-connected) inside the gate. The prediction itself is scored where it falls, as at full
-/// resolution: climbing from it walks a point with a wrong depth along its texture (a point
-/// pushed 15 % along its ray matched 9.9 px from where it really is, test RefusedMatches).
+/// resolution, and climbs only once it matches: climbing to a match walks a point with a wrong
+/// depth onto its texture (a point pushed 15 % along its ray matched 9.9 px from where it
+/// really is, test RefusedMatches).
 constexpr int kClimbedSeeds = 3;
 constexpr double kClimbFromScore = 0.5;
 constexpr int kClimbSteps = 4;
