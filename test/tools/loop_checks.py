@@ -31,18 +31,17 @@ def nearest(poses, stamp):
     return poses[np.argmin(np.abs(poses[:, 0] - stamp))]
 
 
-def optical_axis(pose):
-    x, y, z, w = pose[4:8]
-    # third column of the rotation matrix of the quaternion (camera z in the world)
-    return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
-
-
 def rotation(pose):
     """Rotation matrix of a TUM row's (or S_current_loop's) quaternion qx qy qz qw."""
     x, y, z, w = pose
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def optical_axis(pose):
+    """Camera z in the world of a TUM row (camera to world)."""
+    return rotation(pose[4:8])[:, 2]
 
 
 def angle_deg(a, b):
