@@ -136,15 +136,7 @@ void OpticalFlow::lucasKanadePass(const std::vector<cv::Mat>& previous,
     if (error[i] > params_.max_error) (*ok)[i] = 0;
   }
   if (params_.max_forward_backward_px <= 0.0) return;
-  std::vector<cv::Point2f> back = from;
-  std::vector<unsigned char> back_ok;
-  cv::calcOpticalFlowPyrLK(current, previous, *to, back, back_ok, error, window, max_level,
-                           criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
-  const double max_sq = params_.max_forward_backward_px * params_.max_forward_backward_px;
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    const cv::Point2f d = back[i] - from[i];
-    if (!back_ok[i] || d.dot(d) > max_sq) (*ok)[i] = 0;
-  }
+  dropBackwardMisses(previous, current, levels, from, *to, ok, params_.max_forward_backward_px);
 }
 
 void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
@@ -152,21 +144,37 @@ void OpticalFlow::checkBackward(const features::ImagePyramid& previous,
                                 const std::vector<cv::Point2f>& from,
                                 const std::vector<cv::Point2f>& to, std::vector<unsigned char>* ok,
                                 double max_px) const {
-  if (from.empty()) return;
   const int levels = std::min({params_.pyramid_levels, previous.numLevels(), current.numLevels()});
-  const std::vector<cv::Mat> prev_levels = previous.lucasKanadePyramid(levels);
-  const std::vector<cv::Mat> cur_levels = current.lucasKanadePyramid(levels);
-  std::vector<cv::Point2f> back = from;
+  dropBackwardMisses(previous.lucasKanadePyramid(levels), current.lucasKanadePyramid(levels),
+                     levels, from, to, ok, max_px);
+}
+
+void OpticalFlow::dropBackwardMisses(const std::vector<cv::Mat>& previous,
+                                     const std::vector<cv::Mat>& current, int levels,
+                                     const std::vector<cv::Point2f>& from,
+                                     const std::vector<cv::Point2f>& to,
+                                     std::vector<unsigned char>* ok, double max_px) const {
+  // Only the tracks still standing are followed back (a lost track's end is no position), each
+  // starting where it came from.
+  std::vector<std::size_t> standing;
+  std::vector<cv::Point2f> ends, back;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    if (!(*ok)[i]) continue;
+    standing.push_back(i);
+    ends.push_back(to[i]);
+    back.push_back(from[i]);
+  }
+  if (standing.empty()) return;
   std::vector<unsigned char> back_ok;
   std::vector<float> error;
-  cv::calcOpticalFlowPyrLK(cur_levels, prev_levels, to, back, back_ok, error,
+  cv::calcOpticalFlowPyrLK(current, previous, ends, back, back_ok, error,
                            cv::Size(params_.window, params_.window), levels - 1,
                            cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
                                             params_.max_iterations, params_.min_step_px),
                            cv::OPTFLOW_USE_INITIAL_FLOW);
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    const cv::Point2f d = back[i] - from[i];
-    if (!back_ok[i] || d.dot(d) > max_px * max_px) (*ok)[i] = 0;
+  for (std::size_t k = 0; k < standing.size(); ++k) {
+    const cv::Point2f d = back[k] - from[standing[k]];
+    if (!back_ok[k] || d.dot(d) > max_px * max_px) (*ok)[standing[k]] = 0;
   }
 }
 

@@ -83,6 +83,12 @@ class OpticalFlow {
   void lucasKanadePass(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
                        int levels, const std::vector<cv::Point2f>& from, bool from_start,
                        std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) const;
+  /// checkBackward on pyramids as lucasKanadePass takes them; only tracks with `ok` set are
+  /// followed back.
+  void dropBackwardMisses(const std::vector<cv::Mat>& previous, const std::vector<cv::Mat>& current,
+                          int levels, const std::vector<cv::Point2f>& from,
+                          const std::vector<cv::Point2f>& to, std::vector<unsigned char>* ok,
+                          double max_px) const;
   void trackDis(const features::ImagePyramid& previous, const features::ImagePyramid& current,
                 const std::vector<cv::Point2f>& from, std::vector<cv::Point2f>* to,
                 std::vector<unsigned char>* ok);
