@@ -178,6 +178,16 @@ std::vector<std::pair<int, int>> KeyframeTriangulation::matchAlongEpipolarLines(
   std::vector<int> best_of_other(other.px.size(), kNone);
   std::vector<int> best_distance_of_other(other.px.size(), std::numeric_limits<int>::max());
   std::vector<int> match_of_current(current.px.size(), kNone);
+  // The other keyframe's free corners, gathered once: every corner of the current keyframe tests
+  // them all against its line (400 x 400 per neighbour).
+  std::vector<int> free_j;
+  std::vector<double> free_x, free_y;
+  for (std::size_t j = 0; j < other.px.size(); ++j) {
+    if (other.used[j]) continue;
+    free_j.push_back(static_cast<int>(j));
+    free_x.push_back(other.xy[j].x());
+    free_y.push_back(other.xy[j].y());
+  }
   for (std::size_t i = 0; i < current.px.size(); ++i) {
     if (current.used[i]) continue;
     int best = std::numeric_limits<int>::max(), second = best, best_j = kNone;
@@ -187,15 +197,14 @@ std::vector<std::pair<int, int>> KeyframeTriangulation::matchAlongEpipolarLines(
     const double norm = line.head<2>().norm();
     if (!(norm > 0.0)) continue;
     line *= focal_ / norm;
-    for (std::size_t j = 0; j < other.px.size(); ++j) {
-      if (other.used[j] ||
-          std::abs(line.dot(other.xy[j].homogeneous())) > params_.max_epipolar_px) {
-        continue;
-      }
-      const int d = cv::hal::normHamming(d_i, other.descriptors.ptr<uchar>(static_cast<int>(j)),
-                                         other.descriptors.cols);
+    const double a = line.x(), b = line.y(), c = line.z();
+    for (std::size_t k = 0; k < free_j.size(); ++k) {
+      if (std::abs(a * free_x[k] + b * free_y[k] + c) > params_.max_epipolar_px) continue;
+      const int j = free_j[k];
+      const int d =
+          cv::hal::normHamming(d_i, other.descriptors.ptr<uchar>(j), other.descriptors.cols);
       if (d < best) {
-        second = best, best = d, best_j = static_cast<int>(j);
+        second = best, best = d, best_j = j;
       } else if (d < second) {
         second = d;
       }
