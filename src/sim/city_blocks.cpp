@@ -46,22 +46,34 @@ double buildingHeight(cv::RNG& rng) {
   return rng.uniform(18.0, 25.0);
 }
 
+/// Which end walls of a building are built.
+struct EndWalls {
+  bool at_u0 = true;
+  bool at_u1 = true;
+};
+
 /// A building on [u0, u1] of the side, its front `front` metres behind the kerb: the front
-/// facade and both end walls (back and roof are never seen from the street).
+/// facade and the end walls asked for (back and roof are never seen from the street).
 void addBuilding(Scene& scene, const BlockSide& side, double u0, double u1, double front,
-                 cv::RNG& rng, std::uint32_t& texture_seed) {
+                 EndWalls ends, cv::RNG& rng, std::uint32_t& texture_seed) {
   const double height = buildingHeight(rng), depth = rng.uniform(12.0, 20.0);
   const float gain = static_cast<float>(rng.uniform(0.75, 1.05));
   const Eigen::Vector3f tint = facadeTint(rng);
   const int front_texture =
       scene.addTexture(textures::facade(u1 - u0, height, kFacadeTexelsPerMetre, texture_seed++));
   addWall(scene, side.at(u0, front), side.at(u1, front), height, front_texture, gain, tint);
+  const std::uint32_t end_seed = texture_seed++;
+  if (!ends.at_u0 && !ends.at_u1) return;
   const int end_texture =
-      scene.addTexture(textures::facade(depth, height, kSideTexelsPerMetre, texture_seed++));
-  addWall(scene, side.at(u0, front + depth), side.at(u0, front), height, end_texture, 0.8f * gain,
-          tint);
-  addWall(scene, side.at(u1, front), side.at(u1, front + depth), height, end_texture, 0.7f * gain,
-          tint);
+      scene.addTexture(textures::facade(depth, height, kSideTexelsPerMetre, end_seed));
+  if (ends.at_u0) {
+    addWall(scene, side.at(u0, front + depth), side.at(u0, front), height, end_texture, 0.8f * gain,
+            tint);
+  }
+  if (ends.at_u1) {
+    addWall(scene, side.at(u1, front), side.at(u1, front + depth), height, end_texture, 0.7f * gain,
+            tint);
+  }
 }
 
 /// A gap between buildings: a yard's floor and the building behind it.
@@ -151,8 +163,14 @@ void buildBlockSide(Scene& scene, const CityGrid& grid, const BlockSide& side,
         distanceToPolyline(side.at(mid, -grid.road_half_width), route) < kVisibleRange ||
         distanceToPolyline(side.at(u + width, -grid.road_half_width), route) < kVisibleRange;
     const double setback = rng.uniform(0, 3) == 0 ? rng.uniform(0.5, 4.0) : 0.0;
+    // A corner building's end wall at the crossing would lie in the building line of the side
+    // round the corner, in the plane of that side's facades: two coplanar walls, which the
+    // renderer shows in turn from frame to frame (z-fighting), so that the same place looked
+    // different on a revisit. The facade round the corner closes the building there instead.
+    const EndWalls ends{u > grid.pavement_width + 1e-6, u + width < end - 1e-6};
     if (seen) {
-      addBuilding(scene, side, u, u + width, grid.pavement_width + setback, rng, texture_seed);
+      addBuilding(scene, side, u, u + width, grid.pavement_width + setback, ends, rng,
+                  texture_seed);
     }
     u += width;
     if (u < end - 12.0 && rng.uniform(0, 5) == 0) {
