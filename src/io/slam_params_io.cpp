@@ -58,6 +58,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"tracker", "recovery_max_ratio", &t.recovery_max_ratio},
       {"tracker", "keyframe_refused_matches_px", &t.keyframe_refused_matches_px},
       {"tracker", "compress_idle_patches_after_frames", &t.compress_idle_patches_after_frames},
+      {"tracker", "keyframe_worker", &t.keyframe_worker},
       {"features", "fast_threshold", &t.features.fast_threshold},
       {"features", "min_fast_threshold", &t.features.min_fast_threshold},
       {"features", "border", &t.features.border},

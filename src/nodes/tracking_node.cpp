@@ -57,6 +57,9 @@ class TrackingNode {
     debug_pub_ = it_.advertise("debug_image", 1);
     reset_srv_ = pnh.advertiseService("reset", &TrackingNode::onReset, this);
     map_part_srv_ = pnh.advertiseService("get_map_part", &TrackingNode::onGetMapPart, this);
+    // Wall time: with use_sim_time the clock stops when a bag ends, the last keyframe must not.
+    keyframe_timer_ =
+        nh.createWallTimer(ros::WallDuration(0.01), &TrackingNode::onKeyframeTimer, this);
     update_spinner_.start();
   }
   ~TrackingNode() { update_spinner_.stop(); }  // before the queue it pushes into goes
@@ -265,10 +268,7 @@ class TrackingNode {
       ROS_INFO("loop correction applied (scale %.4f): map -> odom and the path moved",
                poses_.correction().scale());
     }
-    for (const map::KeyframeMessage& keyframe : result.keyframes) {
-      keyframe_pub_.publish(ros_conversions::toKeyframeMsg(
-          keyframe, inbox_.address(keyframe.map_version), camera_info_));
-    }
+    publishKeyframes(result.keyframes);
     if (result.relocalisation_request) publishRequest(*result.relocalisation_request);
     status_pub_.publish(ros_conversions::toTrackingStatusMsg(
         result, *tracker_, inbox_.address(tracker_->trackingMap().version()), header.stamp,
@@ -280,6 +280,20 @@ class TrackingNode {
       debug_pub_.publish(
           ros_conversions::debugImageMsg(image, result, header, params_.frames.optical));
     }
+  }
+
+  void publishKeyframes(const std::vector<map::KeyframeMessage>& keyframes) {
+    for (const map::KeyframeMessage& keyframe : keyframes) {
+      keyframe_pub_.publish(ros_conversions::toKeyframeMsg(
+          keyframe, inbox_.address(keyframe.map_version), camera_info_));
+    }
+  }
+
+  /// A keyframe whose points the tracker's worker has found (tracker.keyframe_worker) goes out
+  /// now, not with the next image (at the end of a bag there is none). In the image callback's
+  /// thread: no map update is applied to the tracker between the keyframe's frame and this.
+  void onKeyframeTimer(const ros::WallTimerEvent&) {
+    if (tracker_ && tracker_->keyframeReady()) publishKeyframes(tracker_->finishKeyframes());
   }
 
   void publishRequest(const map::RelocalisationRequest& request) {
@@ -324,6 +338,7 @@ class TrackingNode {
       response.message = "the tracking node has no camera yet, hence no map";
       return true;
     }
+    publishKeyframes(tracker_->finishKeyframes());  // the map part holds all of the keyframe
     const system::MapSnapshot part = system::trackerPart(*tracker_);
     const std::string bytes = io::encodeSnapshotPart(part);
     response.part.assign(bytes.begin(), bytes.end());
@@ -341,6 +356,7 @@ class TrackingNode {
   ros::Subscriber compressed_sub_, info_sub_, update_sub_, answer_sub_;
   ros::Publisher keyframe_pub_, request_pub_, status_pub_;
   ros::ServiceServer reset_srv_, map_part_srv_;
+  ros::WallTimer keyframe_timer_;
   std::optional<io::MapFile> loaded_map_;  ///< ~map_file, until restored (kept: localization)
   std::string image_topic_;
   ros_conversions::PosePublisher poses_;  ///< tf, odometry and path; the loop correction.

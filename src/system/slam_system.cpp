@@ -13,13 +13,20 @@ double focalOf(const std::shared_ptr<const geometry::CameraModel>& camera) {
   return camera->calibration().meanFocalLength();
 }
 
+/// Inline, everything happens within the frame that causes it: no keyframe worker either.
+tracking::TrackerParams trackerParams(const SlamParams& params) {
+  tracking::TrackerParams tracker = params.tracker;
+  if (!params.mapping_thread) tracker.keyframe_worker = false;
+  return tracker;
+}
+
 }  // namespace
 
 SlamSystem::SlamSystem(const std::shared_ptr<const geometry::CameraModel>& camera,
                        const SlamParams& params)
     : params_(params),
       camera_(camera),
-      tracker_(camera, params.tracker),
+      tracker_(camera, trackerParams(params)),
       mapper_(params.mapper, /*mapper_id=*/1, params.messages),
       loop_closer_(params.loop, params.messages) {
   focalOf(camera_);  // throws without a camera
@@ -42,6 +49,7 @@ SlamSystem::~SlamSystem() {
 
 void SlamSystem::finish() {
   if (finished_) return;
+  sendKeyframes(tracker_.finishKeyframes());  // the last keyframe's worker may still be busy
   finished_ = true;
   if (params_.mapping_thread) {
     // The loop closer first: its last constraints still reach the open mapper queue.
@@ -76,12 +84,7 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
   }
   if (result.has_pose) trajectory_.add(timestamp, result.T_cam_world, result.reference_keyframe);
   if (!finished_) {
-    for (const map::KeyframeMessage& message : result.keyframes) {
-      // Both receivers get their own copy (the image buffer is shared, read-only).
-      const Envelope from = tracker_inbox_.address(message.map_version);
-      mapper_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
-      loop_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
-    }
+    sendKeyframes(result.keyframes);
     // Ahead of the keyframes waiting there, as the ROS tracking node's request overtakes them.
     if (const auto& request = result.relocalisation_request) {
       loop_inbox_.pushUrgent(Addressed<map::RelocalisationRequest>{
@@ -93,6 +96,15 @@ tracking::FrameResult SlamSystem::processFrame(double timestamp, const cv::Mat& 
     drainInbox();
   }
   return result;
+}
+
+void SlamSystem::sendKeyframes(const std::vector<map::KeyframeMessage>& keyframes) {
+  for (const map::KeyframeMessage& message : keyframes) {
+    // Both receivers get their own copy (the image buffer is shared, read-only).
+    const Envelope from = tracker_inbox_.address(message.map_version);
+    mapper_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
+    loop_inbox_.push(Addressed<map::KeyframeMessage>{from, message});
+  }
 }
 
 void SlamSystem::drainInbox() {

@@ -140,6 +140,13 @@ KeyframeTriangulation::Described KeyframeTriangulation::describe(
   return described;
 }
 
+std::vector<map::KeyframeId> KeyframeTriangulation::neighbourIds() const {
+  std::vector<map::KeyframeId> ids;
+  for (const Described& described : recent_)
+    ids.push_back(described.id);
+  return ids;
+}
+
 std::vector<TriangulatedPoint> KeyframeTriangulation::addKeyframe(
     map::KeyframeId id, const geometry::SE3& T_kf_world, const features::ImagePyramid& image,
     const std::vector<Eigen::Vector2d>& occupied, const geometry::CameraModel& camera,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "scale_drift_slam/common/statistics.h"
 #include "scale_drift_slam/common/stopwatch.h"
@@ -119,7 +120,10 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
                                   features::PixelEncoding encoding) {
   common::Stopwatch total, stage;
   const double cpu_start = common::threadCpuMs();
+  // The keyframe dropped at the previous frame first, as it would have been finished there.
+  finishPendingKeyframe();
   FrameResult result;
+  result.keyframes = std::exchange(finished_keyframes_, {});
   result.timestamp = timestamp;
   result.state = state_;
   result.loop_correction = pending_loop_correction_;
@@ -212,6 +216,7 @@ void Tracker::restartYoungLostMap(FrameResult* result) {
   // A fresh tracker: nothing of the young map may leak into the next one. Only the frame
   // counter goes on (relocalisation answers are matched by it).
   const std::uint64_t frame_index = frame_index_;
+  finishPendingKeyframe();  // none (finished at the frame's start): no worker may outlive this
   *this = Tracker(camera_, params_);
   frame_index_ = frame_index;
   result->map_restarted = true;
@@ -241,6 +246,7 @@ void Tracker::requestRelocalisation(double timestamp, const features::ImagePyram
 }
 
 bool Tracker::applyRelocalisation(const map::RelocalisationAnswer& answer) {
+  finishPendingKeyframe();
   if (!relocalisation_ || answer.frame_index != relocalisation_->frame_index) return false;
   const PendingRelocalisation pending = std::move(*relocalisation_);
   relocalisation_.reset();
@@ -317,6 +323,7 @@ void Tracker::restoreMap(
 }
 
 void Tracker::applyMapUpdate(const map::MapUpdate& update) {
+  finishPendingKeyframe();  // made before this update: it must ride with it like the others
   // A bundle adjustment moved keyframes up to N while this tracker went on from newer ones (the
   // mapper or the link behind, an outage): those, their points and the camera ride with N.
   const std::optional<TrackingMap::TailCorrection> tail = map_.tailCorrection(update);
@@ -401,17 +408,14 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
   previous_image_ = image;
   previous_timestamp_ = timestamp;
   last_scene_depth_ = sceneDepth(initial->T_second_first);
-  // The second keyframe's free corners wait for the next keyframe to be matched with.
-  std::vector<Eigen::Vector2d> taken = occupied;
-  addTriangulatedPoints(second.keyframe.id, initial->T_second_first, image, &taken, &second);
-  candidates_.spawn(second.keyframe.id, initial->T_second_first, image, occupied, last_scene_depth_,
-                    *camera_);
   result->has_pose = true;
   result->T_cam_world = initial->T_second_first;
   result->num_inliers = static_cast<int>(previous_measurements_.size());
-  rememberKeyframePoints(second, image);
   result->keyframes.push_back(std::move(first));
-  result->keyframes.push_back(std::move(second));
+  // The second keyframe's free corners wait for the next keyframe to be matched with (nothing to
+  // match yet, so no worker): both keyframes are reported with this frame.
+  triangulateKeyframe(PendingKeyframe{std::move(second), image, std::move(occupied), {}},
+                      /*in_worker=*/false, result);
 }
 
 double Tracker::sceneDepth(const geometry::SE3& T_cam_world) const {

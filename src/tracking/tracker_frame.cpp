@@ -1,8 +1,12 @@
 // Tracker: tracking one frame and dropping keyframes (the rest is in tracker.cpp).
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <future>
+#include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "scale_drift_slam/common/stopwatch.h"
 #include "scale_drift_slam/geometry/rolling_shutter_camera.h"
@@ -322,45 +326,88 @@ void Tracker::dropKeyframe(double timestamp, const features::ImagePyramid& image
     if (const auto px = frame_camera_->project(T_kf_world * feature.p_world))
       occupied.push_back(*px);
   }
-  addTriangulatedPoints(kf_id, T_kf_world, image, &occupied, &message);
-  candidates_.spawn(kf_id, T_kf_world, image, occupied, last_scene_depth_, *frame_camera_);
+  triangulateKeyframe(PendingKeyframe{std::move(message), image, std::move(occupied), {}},
+                      params_.keyframe_worker, result);
+}
+
+void Tracker::triangulateKeyframe(PendingKeyframe pending, bool in_worker, FrameResult* result) {
+  // The candidates' corners stay theirs: their filters will promote them.
+  std::vector<Eigen::Vector2d> taken = pending.occupied;
+  for (const cv::Point2f& px : candidates_.pixels())
+    taken.emplace_back(px.x, px.y);
+  // The worker reads copies only (and triangulation_, which nothing else touches meanwhile):
+  // the poses of the keyframes it matches with as they are now.
+  std::unordered_map<map::KeyframeId, geometry::SE3> poses;
+  for (const map::KeyframeId id : triangulation_.neighbourIds()) {
+    if (map_.hasKeyframe(id)) poses.emplace(id, map_.keyframe(id).T_kf_world);
+  }
+  auto triangulate = [triangulation = &triangulation_, id = pending.message.keyframe.id,
+                      T_kf_world = pending.message.keyframe.T_kf_world, image = pending.image,
+                      taken = std::move(taken), camera = frame_camera_,
+                      poses = std::move(poses)]() {
+    const auto pose_of = [&poses](map::KeyframeId other) -> std::optional<geometry::SE3> {
+      const auto it = poses.find(other);
+      if (it == poses.end()) return std::nullopt;
+      return it->second;
+    };
+    return triangulation->addKeyframe(id, T_kf_world, image, taken, *camera, pose_of);
+  };
+  if (in_worker) {
+    pending.triangulated = std::async(std::launch::async, std::move(triangulate));
+    pending_keyframe_ = std::move(pending);
+    return;
+  }
+  std::promise<std::vector<TriangulatedPoint>> now;
+  now.set_value(triangulate());
+  pending.triangulated = now.get_future();
+  completeKeyframe(std::move(pending), &result->keyframes);
+}
+
+void Tracker::completeKeyframe(PendingKeyframe pending, std::vector<map::KeyframeMessage>* out) {
+  map::KeyframeMessage& message = pending.message;
+  const map::KeyframeId kf_id = message.keyframe.id;
+  const geometry::SE3 T_kf_world = message.keyframe.T_kf_world;
+  for (const TriangulatedPoint& point : pending.triangulated.get()) {
+    features::PointAppearance appearance;
+    if (!appearance.cut(pending.image, point.px)) continue;
+    const map::PointId id = addNewPoint(point.p_world, kf_id, std::move(appearance), &message);
+    message.keyframe.observations.push_back({id, point.xy});
+    message.earlier_observations.push_back({point.other, id, point.other_xy});
+    map_.linkPoint(kf_id, id);
+    map_.linkPoint(point.other, id);
+    pending.occupied.push_back(point.px);
+  }
+  candidates_.spawn(kf_id, T_kf_world, pending.image, pending.occupied, last_scene_depth_,
+                    *frame_camera_);
   // Everything the keyframe matched, refused matches included: the ratio rule then compares the
   // frame's inliers with it (on real images, where 30-46 % of the matches are refused, keyframes
   // come sooner; doc/frontend.md, "Refused matches in the keyframe").
   tracked_at_keyframe_ = static_cast<int>(message.keyframe.observations.size());
-  rememberKeyframePoints(message, image);
+  rememberKeyframePoints(message, pending.image);
   // Idle points' patches compressed, looked at every half period (the points due only).
   const auto idle = static_cast<std::uint64_t>(params_.compress_idle_patches_after_frames);
   if (idle > 0 && frame_index_ >= last_patch_sweep_frame_ + idle / 2) {
     map_.compressIdlePatches(frame_index_, idle);
     last_patch_sweep_frame_ = frame_index_;
   }
-  result->keyframes.push_back(std::move(message));
+  out->push_back(std::move(message));
 }
 
-void Tracker::addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& T_kf_world,
-                                    const features::ImagePyramid& image,
-                                    std::vector<Eigen::Vector2d>* occupied,
-                                    map::KeyframeMessage* message) {
-  // The candidates' corners stay theirs: their filters will promote them.
-  std::vector<Eigen::Vector2d> taken = *occupied;
-  for (const cv::Point2f& px : candidates_.pixels())
-    taken.emplace_back(px.x, px.y);
-  const auto pose_of = [this](map::KeyframeId id) -> std::optional<geometry::SE3> {
-    if (!map_.hasKeyframe(id)) return std::nullopt;
-    return map_.keyframe(id).T_kf_world;
-  };
-  for (const TriangulatedPoint& point :
-       triangulation_.addKeyframe(kf_id, T_kf_world, image, taken, *frame_camera_, pose_of)) {
-    features::PointAppearance appearance;
-    if (!appearance.cut(image, point.px)) continue;
-    const map::PointId id = addNewPoint(point.p_world, kf_id, std::move(appearance), message);
-    message->keyframe.observations.push_back({id, point.xy});
-    message->earlier_observations.push_back({point.other, id, point.other_xy});
-    map_.linkPoint(kf_id, id);
-    map_.linkPoint(point.other, id);
-    occupied->push_back(point.px);
-  }
+void Tracker::finishPendingKeyframe() {
+  if (!pending_keyframe_) return;
+  PendingKeyframe pending = std::move(*pending_keyframe_);
+  pending_keyframe_.reset();
+  completeKeyframe(std::move(pending), &finished_keyframes_);
+}
+
+bool Tracker::keyframeReady() const {
+  return pending_keyframe_ && pending_keyframe_->triangulated.wait_for(std::chrono::seconds(0)) ==
+                                  std::future_status::ready;
+}
+
+std::vector<map::KeyframeMessage> Tracker::finishKeyframes() {
+  finishPendingKeyframe();
+  return std::exchange(finished_keyframes_, {});
 }
 
 }  // namespace scale_drift_slam::tracking

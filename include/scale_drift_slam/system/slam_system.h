@@ -110,6 +110,8 @@ class SlamSystem {
   void runInline();
   /// Applies what the tracker's inbox holds; logs the messages it refused.
   void drainInbox();
+  /// Sends keyframes to the mapper and the loop closer.
+  void sendKeyframes(const std::vector<map::KeyframeMessage>& keyframes);
   template <typename Input>
   void handleSafely(Input input);
   void handle(MapperInput input);

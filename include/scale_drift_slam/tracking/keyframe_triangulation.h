@@ -77,6 +77,9 @@ class KeyframeTriangulation {
   KeyframeTriangulation(const KeyframeTriangulationParams& params,
                         const features::FeatureDetectionParams& detection, double focal_length_px);
 
+  /// The earlier keyframes that addKeyframe() matches with (their poses are looked up).
+  std::vector<map::KeyframeId> neighbourIds() const;
+
   /// At a new keyframe: describes its corners away from `occupied` (pixels of its map points and
   /// of the feature candidates), matches them with the free corners of the `neighbours` newest
   /// earlier keyframes and returns the points triangulated (each corner used once). The new

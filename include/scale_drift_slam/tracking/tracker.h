@@ -7,6 +7,7 @@
 // corrections come back as map::MapUpdate (applyMapUpdate), applied between frames.
 // Runs on one thread (the tracking thread or node); owns its TrackingMap copy and never blocks.
 
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -92,6 +93,14 @@ struct TrackerParams {
   /// Patches of map points not searched for this many frames are kept compressed, 4 bits per
   /// pixel (features::PointAppearance::compress; expanded when searched again). 0: never.
   int compress_idle_patches_after_frames = 100;
+  /// A keyframe's new points by ORB matching with the earlier keyframes (keyframe_triangulation.h,
+  /// about half of a keyframe frame's CPU) are found by a worker thread while the camera's next
+  /// frame is awaited; the keyframe is finished (its points added, new feature candidates
+  /// spawned) and reported when the next frame comes, before anything else changes the tracker,
+  /// or by finishKeyframes(). Every result is the same as without the worker; only the keyframe
+  /// is reported one frame later. false: all in the keyframe's frame (deterministic timing; the
+  /// SLAM system turns it off when it runs inline).
+  bool keyframe_worker = true;
   features::FeatureDetectionParams features;
   InitializerParams initializer;
   MotionPriorParams motion_prior;
@@ -125,8 +134,10 @@ struct FrameResult {
   /// come from the motion-only BA (map initialisation).
   Eigen::Matrix<double, 6, 6> pose_information = Eigen::Matrix<double, 6, 6>::Zero();
   int num_visible = 0, num_found = 0, num_inliers = 0;
-  std::vector<Eigen::Vector2d> tracked_px;      ///< Image positions of the inlier map points.
-  std::vector<map::KeyframeMessage> keyframes;  ///< Dropped at this frame (2 at initialisation).
+  std::vector<Eigen::Vector2d> tracked_px;  ///< Image positions of the inlier map points.
+  /// Keyframes finished at this frame (2 at initialisation). With tracker.keyframe_worker a
+  /// keyframe dropped at one frame is finished at the next (or by Tracker::finishKeyframes()).
+  std::vector<map::KeyframeMessage> keyframes;
   /// The newest keyframe when the frame was tracked: the frame's pose moves with its loop
   /// corrections (mapping::CorrectedTrajectory).
   std::optional<map::KeyframeId> reference_keyframe;
@@ -169,6 +180,14 @@ class Tracker {
   /// and map updates work as before.
   void setLocalizationOnly(bool on) { localization_only_ = on; }
   bool localizationOnly() const { return localization_only_; }
+
+  /// A keyframe dropped but not yet finished (tracker.keyframe_worker).
+  bool keyframePending() const { return pending_keyframe_.has_value(); }
+  /// Its worker is done: finishKeyframes() would not wait.
+  bool keyframeReady() const;
+  /// Finishes the pending keyframe (waiting for its worker) and returns the keyframes finished
+  /// and not yet reported: at the end of a stream, or to report a keyframe before the next frame.
+  std::vector<map::KeyframeMessage> finishKeyframes();
 
   TrackingState state() const { return state_; }
   /// The bit depth 16-bit frames are read with (tracker.mono16_bit_depth, or measured); 0 before
@@ -256,11 +275,20 @@ class Tracker {
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
                            features::PointAppearance appearance, map::KeyframeMessage* message);
-  /// New points at keyframe `kf_id` matched with the previous keyframes (keyframe_triangulation.h)
-  /// away from the `occupied` pixels; their pixels are appended to `occupied`.
-  void addTriangulatedPoints(map::KeyframeId kf_id, const geometry::SE3& T_kf_world,
-                             const features::ImagePyramid& image,
-                             std::vector<Eigen::Vector2d>* occupied, map::KeyframeMessage* message);
+  /// A keyframe whose triangulation runs in the worker (tracker.keyframe_worker).
+  struct PendingKeyframe {
+    map::KeyframeMessage message;
+    features::ImagePyramid image;
+    std::vector<Eigen::Vector2d> occupied;  ///< Pixels of its points so far.
+    std::future<std::vector<TriangulatedPoint>> triangulated;
+  };
+  /// Triangulates the keyframe's new points in the worker (finished later), or at once (the
+  /// keyframe is finished into `result`).
+  void triangulateKeyframe(PendingKeyframe pending, bool in_worker, FrameResult* result);
+  /// Adds the triangulated points, spawns new candidates, reports the keyframe.
+  void completeKeyframe(PendingKeyframe pending, std::vector<map::KeyframeMessage>* out);
+  /// Completes the pending keyframe into finished_keyframes_ (before anything changes the map).
+  void finishPendingKeyframe();
   map::KeyframeMessage makeKeyframe(double timestamp, const geometry::SE3& T_kf_world,
                                     const features::ImagePyramid& image);
   double sceneDepth(const geometry::SE3& T_cam_world) const;
@@ -323,6 +351,11 @@ class Tracker {
   /// A restored map: not yet relocalised in (no pose to track from), never discarded.
   bool awaiting_first_relocalisation_ = false;
   bool restored_map_ = false;
+  /// Keyframes finished between frames (by a map update), reported with the next frame.
+  std::vector<map::KeyframeMessage> finished_keyframes_;
+  /// The keyframe whose worker may be running. Last member: destroyed first, its future waits
+  /// for the worker, which uses triangulation_.
+  std::optional<PendingKeyframe> pending_keyframe_;
 };
 
 }  // namespace scale_drift_slam::tracking
