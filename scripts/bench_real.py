@@ -187,6 +187,9 @@ def run_sequence(sequence, bin_dir, out_dir, timeout, config=None):
     if cpu:
         figures["tracking_cpu_median_ms"] = cpu["median_ms"]
         figures["tracking_cpu_p95_ms"] = cpu["p95_ms"]
+    worker = summary.get("timing", {}).get("keyframe_worker_cpu")
+    if worker:
+        figures["keyframe_worker_cpu_median_ms"] = worker["median_ms"]
     figures["keyframes"] = summary.get("keyframes")
     figures["map_restarts"] = summary.get("map_restarts", 0)
     figures["relocalisations"] = summary.get("relocalisations", 0)
@@ -269,6 +272,8 @@ def table_row(sequence):
     drift = "-" if drift is None else f"{drift:+.1f} %"
     cpu = ("-" if f.get("tracking_cpu_median_ms") is None else
            f"{f['tracking_cpu_median_ms']:.1f} / {f['tracking_cpu_p95_ms']:.1f} ms")
+    if f.get("keyframe_worker_cpu_median_ms") is not None:
+        cpu += f" (+ {f['keyframe_worker_cpu_median_ms']:.1f} ms per keyframe in the worker)"
     cells = [sequence.name, "-" if frames is None else str(frames),
              number(f.get("first_tracked_frame"), 0), moving,
              tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB"),

@@ -124,6 +124,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   finishPendingKeyframe();
   FrameResult result;
   result.keyframes = std::exchange(finished_keyframes_, {});
+  result.times.keyframe_worker_cpu = std::exchange(worker_cpu_ms_, 0.0);
   result.timestamp = timestamp;
   result.state = state_;
   result.loop_correction = pending_loop_correction_;

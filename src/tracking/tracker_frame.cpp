@@ -353,12 +353,16 @@ void Tracker::triangulateKeyframe(PendingKeyframe pending, bool in_worker, Frame
     return triangulation->addKeyframe(id, T_kf_world, image, taken, *camera, pose_of);
   };
   if (in_worker) {
-    pending.triangulated = std::async(std::launch::async, std::move(triangulate));
+    pending.triangulated = std::async(std::launch::async, [triangulate = std::move(triangulate)]() {
+      const double cpu_start = common::threadCpuMs();
+      std::vector<TriangulatedPoint> points = triangulate();
+      return WorkerOutput{std::move(points), common::threadCpuMs() - cpu_start};
+    });
     pending_keyframe_ = std::move(pending);
     return;
   }
-  std::promise<std::vector<TriangulatedPoint>> now;
-  now.set_value(triangulate());
+  std::promise<WorkerOutput> now;  // its CPU time is the frame's own
+  now.set_value(WorkerOutput{triangulate(), 0.0});
   pending.triangulated = now.get_future();
   completeKeyframe(std::move(pending), &result->keyframes);
 }
@@ -367,7 +371,9 @@ void Tracker::completeKeyframe(PendingKeyframe pending, std::vector<map::Keyfram
   map::KeyframeMessage& message = pending.message;
   const map::KeyframeId kf_id = message.keyframe.id;
   const geometry::SE3 T_kf_world = message.keyframe.T_kf_world;
-  for (const TriangulatedPoint& point : pending.triangulated.get()) {
+  const WorkerOutput output = pending.triangulated.get();
+  worker_cpu_ms_ += output.cpu_ms;
+  for (const TriangulatedPoint& point : output.points) {
     features::PointAppearance appearance;
     if (!appearance.cut(pending.image, point.px)) continue;
     const map::PointId id = addNewPoint(point.p_world, kf_id, std::move(appearance), &message);

@@ -121,6 +121,9 @@ std::string trackingStateName(TrackingState state);
 struct StageTimes {
   double prepare = 0, flow = 0, search = 0, motion_ba = 0, filters = 0, keyframe = 0, total = 0;
   double cpu = 0;
+  /// The keyframe worker's CPU time for the keyframes reported with this frame (not in `cpu`;
+  /// 0 without tracker.keyframe_worker, where that work is part of `cpu`).
+  double keyframe_worker_cpu = 0;
 };
 
 struct FrameResult {
@@ -275,12 +278,16 @@ class Tracker {
   /// A new map point in the tracking map, announced in `message` (new_points); returns its id.
   map::PointId addNewPoint(const Eigen::Vector3d& p_world, map::KeyframeId reference_keyframe,
                            features::PointAppearance appearance, map::KeyframeMessage* message);
+  struct WorkerOutput {
+    std::vector<TriangulatedPoint> points;
+    double cpu_ms = 0.0;  ///< The worker thread's CPU time (0 when run in the frame).
+  };
   /// A keyframe whose triangulation runs in the worker (tracker.keyframe_worker).
   struct PendingKeyframe {
     map::KeyframeMessage message;
     features::ImagePyramid image;
     std::vector<Eigen::Vector2d> occupied;  ///< Pixels of its points so far.
-    std::future<std::vector<TriangulatedPoint>> triangulated;
+    std::future<WorkerOutput> triangulated;
   };
   /// Triangulates the keyframe's new points in the worker (finished later), or at once (the
   /// keyframe is finished into `result`).
@@ -351,6 +358,7 @@ class Tracker {
   /// A restored map: not yet relocalised in (no pose to track from), never discarded.
   bool awaiting_first_relocalisation_ = false;
   bool restored_map_ = false;
+  double worker_cpu_ms_ = 0.0;  ///< Of the keyframes finished since the last frame's result.
   /// Keyframes finished between frames (by a map update), reported with the next frame.
   std::vector<map::KeyframeMessage> finished_keyframes_;
   /// The keyframe whose worker may be running. Last member: destroyed first, its future waits
