@@ -129,7 +129,7 @@ VerificationView LoopCloser::viewOf(map::KeyframeId id, const KeyframeAppearance
     view.point_ids.push_back(o.point_id);
     view.point_xy.push_back(o.xyd());
     view.point_camera.push_back(p_cam);
-    included.insert(o.point_id);
+    if (with_covisible_points) included.insert(o.point_id);  // only the neighbourhood reads it
   }
   if (with_covisible_points) {
     // The neighbourhood's points in this keyframe's view, as ORB-SLAM gathers a loop candidate's
