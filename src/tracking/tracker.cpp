@@ -189,6 +189,9 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
     for (const Measurement& m : previous_measurements_)
       result.tracked_px.push_back(m.px);
   }
+  if (!keyframe_problem_.empty()) {
+    result.message += (result.message.empty() ? "" : "; ") + std::exchange(keyframe_problem_, {});
+  }
   result.times.total = total.lapMs();
   result.times.cpu = common::threadCpuMs() - cpu_start;
   return result;

@@ -362,7 +362,11 @@ void Tracker::triangulateKeyframe(PendingKeyframe pending, bool in_worker, Frame
     return;
   }
   std::promise<WorkerOutput> now;  // its CPU time is the frame's own
-  now.set_value(WorkerOutput{triangulate(), 0.0});
+  try {
+    now.set_value(WorkerOutput{triangulate(), 0.0});
+  } catch (const std::exception&) {
+    now.set_exception(std::current_exception());  // handled as from the worker
+  }
   pending.triangulated = now.get_future();
   completeKeyframe(std::move(pending), &result->keyframes);
 }
@@ -371,7 +375,14 @@ void Tracker::completeKeyframe(PendingKeyframe pending, std::vector<map::Keyfram
   map::KeyframeMessage& message = pending.message;
   const map::KeyframeId kf_id = message.keyframe.id;
   const geometry::SE3 T_kf_world = message.keyframe.T_kf_world;
-  const WorkerOutput output = pending.triangulated.get();
+  WorkerOutput output;
+  try {
+    output = pending.triangulated.get();
+  } catch (const std::exception& e) {
+    // The keyframe is in the map already: it is finished without these points, not lost.
+    keyframe_problem_ =
+        "keyframe " + std::to_string(kf_id) + ": no points by keyframe matching (" + e.what() + ")";
+  }
   worker_cpu_ms_ += output.cpu_ms;
   for (const TriangulatedPoint& point : output.points) {
     features::PointAppearance appearance;

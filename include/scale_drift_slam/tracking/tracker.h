@@ -358,7 +358,8 @@ class Tracker {
   /// A restored map: not yet relocalised in (no pose to track from), never discarded.
   bool awaiting_first_relocalisation_ = false;
   bool restored_map_ = false;
-  double worker_cpu_ms_ = 0.0;  ///< Of the keyframes finished since the last frame's result.
+  double worker_cpu_ms_ = 0.0;    ///< Of the keyframes finished since the last frame's result.
+  std::string keyframe_problem_;  ///< Why a keyframe got no matched points (the next message).
   /// Keyframes finished between frames (by a map update), reported with the next frame.
   std::vector<map::KeyframeMessage> finished_keyframes_;
   /// The keyframe whose worker may be running. Last member: destroyed first, its future waits
