@@ -122,6 +122,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   const double cpu_start = common::threadCpuMs();
   // The keyframe dropped at the previous frame first, as it would have been finished there.
   finishPendingKeyframe();
+  const double finishing_ms = stage.lapMs();  // counted as keyframe work, not as preparation
   FrameResult result;
   result.keyframes = std::exchange(finished_keyframes_, {});
   result.times.keyframe_worker_cpu = std::exchange(worker_cpu_ms_, 0.0);
@@ -192,6 +193,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   if (!keyframe_problem_.empty()) {
     result.message += (result.message.empty() ? "" : "; ") + std::exchange(keyframe_problem_, {});
   }
+  result.times.keyframe += finishing_ms;
   result.times.total = total.lapMs();
   result.times.cpu = common::threadCpuMs() - cpu_start;
   return result;

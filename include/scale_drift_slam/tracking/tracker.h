@@ -116,7 +116,8 @@ struct TrackerParams {
 enum class TrackingState { kInitializing, kGood, kWeak, kLost };
 std::string trackingStateName(TrackingState state);
 
-/// Milliseconds spent in each stage of one frame (0 when the stage did not run).
+/// Milliseconds spent in each stage of one frame (0 when the stage did not run). `keyframe`: the
+/// keyframe rule, making a keyframe, and finishing the one the worker had (keyframe_worker).
 /// `cpu` is the tracking thread's CPU time for the whole frame (unaffected by other processes).
 struct StageTimes {
   double prepare = 0, flow = 0, search = 0, motion_ba = 0, filters = 0, keyframe = 0, total = 0;
