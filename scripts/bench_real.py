@@ -146,11 +146,11 @@ def last_error_line(text):
 # --- running one sequence ---------------------------------------------------------------------
 
 
-def run_sequence(sequence, bin_dir, out_dir, timeout, config=None):
+def run_sequence(sequence, bin_dir, out_dir, timeout, config=None, rate=0.0):
     out = out_dir / sequence.name.replace("/", "_")
     out.mkdir(parents=True, exist_ok=True)
     command = ["/usr/bin/time", "-v", "-o", str(out / "time.txt"), str(bin_dir / "run_sequence"),
-               str(sequence.dataset), "--out", str(out), "--quiet"]
+               str(sequence.dataset), "--out", str(out), "--quiet", "--rate", f"{rate:g}"]
     if sequence.calibration:
         command += ["--calib", str(sequence.calibration)]
     if config:
@@ -178,10 +178,17 @@ def run_sequence(sequence, bin_dir, out_dir, timeout, config=None):
     frames = read_frames_csv(out / "frames.csv")
     figures = sequence.figures
     figures["frames"] = summary["frames"]
-    figures["tracked"] = summary["tracked"]
-    figures["tracked_percent"] = 100.0 * summary["tracked"] / max(1, summary["frames"])
+    # What the user keeps: the frames of the final map (trajectory.txt). Frames tracked in a
+    # young map that was discarded later are counted apart, not as tracked.
+    kept_map = len(summary.get("maps", [])) - 1
+    figures["tracked"] = summary.get("tracked_final_map", summary["tracked"])
+    figures["tracked_percent"] = 100.0 * figures["tracked"] / max(1, summary["frames"])
+    figures["tracked_in_discarded_maps"] = summary["tracked"] - figures["tracked"]
     tracked_indices = [int(f["frame"]) for f in frames if f["state"] in TRACKING_STATES]
-    figures["first_tracked_frame"] = tracked_indices[0] if tracked_indices else None
+    kept_indices = [int(f["frame"]) for f in frames
+                    if f["state"] in TRACKING_STATES and int(f.get("map", 0)) == kept_map]
+    figures["first_tracked_frame"] = kept_indices[0] if kept_indices else None
+    figures["first_tracked_frame_any_map"] = tracked_indices[0] if tracked_indices else None
     figures["frame_times"] = [float(f["timestamp"]) for f in frames]
     cpu = summary.get("timing", {}).get("tracking_cpu")
     if cpu:
@@ -197,7 +204,10 @@ def run_sequence(sequence, bin_dir, out_dir, timeout, config=None):
     if figures["rejected_frames"]:
         sequence.notes.append(f"{figures['rejected_frames']} frames rejected")
     if figures["map_restarts"]:
-        sequence.notes.append(f"{figures['map_restarts']} young map(s) discarded")
+        sequence.notes.append(
+            f"{figures['map_restarts']} young map(s) discarded, with "
+            f"{figures['tracked_in_discarded_maps']} frames tracked in them (first from frame "
+            f"{figures['first_tracked_frame_any_map']}), not counted as tracked")
     if figures["relocalisations"]:
         sequence.notes.append(f"{figures['relocalisations']} relocalisation(s)")
     if not tracked_indices and frames:
@@ -220,7 +230,9 @@ def evaluate(sequence, bin_dir, out):
         sequence.figures["first_moving_frame"] = moving
         sequence.figures["ground_truth_motion_m"] = largest
     if not sequence.figures.get("tracked"):
-        return  # nothing to evaluate; the notes already say why
+        if sequence.figures.get("tracked_in_discarded_maps"):
+            sequence.notes.append("trajectory.txt holds no poses (every map discarded): no ATE")
+        return  # nothing to evaluate; the notes say why
     command = [str(bin_dir / "evaluate_trajectory"), str(sequence.ground_truth),
                str(out / "trajectory.txt"), "--json"]
     result = subprocess.run(command, capture_output=True, text=True)
@@ -299,7 +311,9 @@ def header(arguments):
         f"{git_commit(arguments.root)}; {os.cpu_count()} cores ({cpu_model}, "
         f"{platform.machine()}), "
         f"load average {os.getloadavg()[0]:.1f} at the start"
-        f"{f'; parameters `{arguments.config}`' if arguments.config else ''}.",
+        f"{f'; parameters `{arguments.config}`' if arguments.config else ''}; frames fed "
+        f"{'as fast as tracking goes' if arguments.rate <= 0 else f'at {arguments.rate:g} x their rate'}"
+        f" (--rate {arguments.rate:g}).",
         "",
     ]
 
@@ -313,6 +327,9 @@ def main():
     parser.add_argument("--root", type=Path, default=Path(__file__).resolve().parent.parent)
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per sequence")
     parser.add_argument("--config", type=Path, help="parameter file for run_sequence (--config)")
+    parser.add_argument("--rate", type=float, default=0.0,
+                        help="run_sequence --rate: 0 (default) feeds the frames as fast as "
+                             "tracking goes, 1 at their camera's rate, as a live camera would")
     arguments = parser.parse_args()
     if not arguments.data.is_dir():
         sys.exit(f"bench_real.py: no data folder '{arguments.data}'")
@@ -325,7 +342,7 @@ def main():
             continue
         print(f"[bench real] {sequence.name} ({sequence.layout})", flush=True)
         out = run_sequence(sequence, arguments.bin_dir, runs_dir, arguments.timeout,
-                           arguments.config)
+                           arguments.config, arguments.rate)
         if not sequence.failed:
             evaluate(sequence, arguments.bin_dir, out)
         print("  " + table_row(sequence), flush=True)
