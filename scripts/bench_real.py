@@ -150,7 +150,9 @@ def run_sequence(sequence, bin_dir, out_dir, timeout, config=None, rate=0.0):
     out = out_dir / sequence.name.replace("/", "_")
     out.mkdir(parents=True, exist_ok=True)
     command = ["/usr/bin/time", "-v", "-o", str(out / "time.txt"), str(bin_dir / "run_sequence"),
-               str(sequence.dataset), "--out", str(out), "--quiet", "--rate", f"{rate:g}"]
+               str(sequence.dataset), "--out", str(out), "--quiet"]
+    if rate > 0:  # (older run_sequence builds, for comparisons, know no --rate)
+        command += ["--rate", f"{rate:g}"]
     if sequence.calibration:
         command += ["--calib", str(sequence.calibration)]
     if config:
@@ -180,13 +182,14 @@ def run_sequence(sequence, bin_dir, out_dir, timeout, config=None, rate=0.0):
     figures["frames"] = summary["frames"]
     # What the user keeps: the frames of the final map (trajectory.txt). Frames tracked in a
     # young map that was discarded later are counted apart, not as tracked.
-    kept_map = len(summary.get("maps", [])) - 1
+    maps = summary.get("maps")  # (older run_sequence builds write no per-map figures)
     figures["tracked"] = summary.get("tracked_final_map", summary["tracked"])
     figures["tracked_percent"] = 100.0 * figures["tracked"] / max(1, summary["frames"])
     figures["tracked_in_discarded_maps"] = summary["tracked"] - figures["tracked"]
     tracked_indices = [int(f["frame"]) for f in frames if f["state"] in TRACKING_STATES]
-    kept_indices = [int(f["frame"]) for f in frames
-                    if f["state"] in TRACKING_STATES and int(f.get("map", 0)) == kept_map]
+    kept_indices = ([int(f["frame"]) for f in frames
+                     if f["state"] in TRACKING_STATES and int(f.get("map", 0)) == len(maps) - 1]
+                    if maps else tracked_indices)
     figures["first_tracked_frame"] = kept_indices[0] if kept_indices else None
     figures["first_tracked_frame_any_map"] = tracked_indices[0] if tracked_indices else None
     figures["frame_times"] = [float(f["timestamp"]) for f in frames]
