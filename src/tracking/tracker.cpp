@@ -182,6 +182,13 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
   }
   if (state_ == TrackingState::kLost && !result.rejected) {
     requestRelocalisation(timestamp, pyramid, &result);
+    if (initialising_next_map_) {
+      try {
+        initialiseNextMap(timestamp, pyramid, &result);
+      } catch (const cv::Exception& e) {  // as for initialise: the frame is reported, not fatal
+        result.message += std::string("; new map: OpenCV failed: ") + e.what();
+      }
+    }
   }
   restartYoungLostMap(&result);
   if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
@@ -213,12 +220,44 @@ void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
 }
 
 void Tracker::restartYoungLostMap(FrameResult* result) {
-  lost_in_row_ = state_ == TrackingState::kLost ? lost_in_row_ + 1 : 0;
+  if (state_ != TrackingState::kLost) {
+    lost_in_row_ = 0;
+    initialising_next_map_ = false;  // found again (or a new map started)
+    return;
+  }
+  ++lost_in_row_;
   const std::size_t keyframes = map_.numKeyframes();
-  if (restored_map_ || lost_in_row_ < params_.restart_after_lost_frames ||
+  if (initialising_next_map_ || restored_map_ || lost_in_row_ < params_.restart_after_lost_frames ||
       keyframes >= static_cast<std::size_t>(params_.restart_below_keyframes)) {
     return;
   }
+  // The young map is kept until a new one starts: if none does (the camera sees nothing usable
+  // again), the young map's poses are the ones the run keeps.
+  initialising_next_map_ = true;
+  initializer_.reset();
+  result->message += (result->message.empty() ? "" : "; ") + std::string("lost for ") +
+                     std::to_string(params_.restart_after_lost_frames) + " frames with a map of " +
+                     std::to_string(keyframes) +
+                     " keyframes (too young to relocalise in): initialising a new map, the young "
+                     "map kept until it starts";
+}
+
+void Tracker::initialiseNextMap(double timestamp, const features::ImagePyramid& frame,
+                                FrameResult* result) {
+  // The frame as a fresh tracker would see it: with a corner cache of its own (the lost map's
+  // search filled the frame's at its threshold and border, which changes the corners at the
+  // border of the initializer's).
+  features::ImagePyramid image = frame;
+  image.fast_corners = std::make_shared<features::FastCornerCache>(image.base());
+  std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
+  if (!initial) {
+    result->message +=
+        (result->message.empty() ? "" : "; ") + std::string("new map: ") + initializer_.status();
+    return;
+  }
+  const std::string message = "the young map (" + std::to_string(map_.numKeyframes()) +
+                              " keyframes, lost for " + std::to_string(lost_in_row_) +
+                              " frames) discarded: " + initializer_.status();
   // A fresh tracker: nothing of the young map may leak into the next one. Only the frame
   // counter goes on (relocalisation answers are matched by it).
   const std::uint64_t frame_index = frame_index_;
@@ -226,13 +265,11 @@ void Tracker::restartYoungLostMap(FrameResult* result) {
   *this = Tracker(camera_, params_);
   frame_index_ = frame_index;
   result->map_restarted = true;
-  result->state = state_;
-  result->has_pose = false;
   result->relocalisation_request.reset();
-  result->message += (result->message.empty() ? "" : "; ") + std::string("lost for ") +
-                     std::to_string(params_.restart_after_lost_frames) + " frames with a map of " +
-                     std::to_string(keyframes) +
-                     " keyframes (too young to relocalise in): discarded, initialising again";
+  result->keyframes.clear();  // the young map's, if any: its receivers drop it anyway
+  result->loop_correction.reset();
+  result->message = message;
+  startMap(*initial, timestamp, image, result);
 }
 
 void Tracker::requestRelocalisation(double timestamp, const features::ImagePyramid& image,
@@ -380,42 +417,46 @@ map::KeyframeMessage Tracker::makeKeyframe(double timestamp, const geometry::SE3
 
 void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
                          FrameResult* result) {
-  frame_camera_ = camera_;  // no motion known yet: measured as a global shutter
   std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
   result->message = initializer_.status();
-  if (!initial) return;
+  if (initial) startMap(*initial, timestamp, image, result);
+}
+
+void Tracker::startMap(const InitialMap& initial, double timestamp,
+                       const features::ImagePyramid& image, FrameResult* result) {
+  frame_camera_ = camera_;  // no motion known yet: measured as a global shutter
   map::KeyframeMessage first =
-      makeKeyframe(initial->first_timestamp, geometry::SE3(), initial->first_image);
-  map::KeyframeMessage second = makeKeyframe(timestamp, initial->T_second_first, image);
+      makeKeyframe(initial.first_timestamp, geometry::SE3(), initial.first_image);
+  map::KeyframeMessage second = makeKeyframe(timestamp, initial.T_second_first, image);
   TrackedKeyframe first_kf{
       first.keyframe.id, first.keyframe.timestamp, first.keyframe.T_kf_world, {}, next_point_id_};
   TrackedKeyframe second_kf{
       second.keyframe.id, timestamp, second.keyframe.T_kf_world, {}, next_point_id_};
   previous_measurements_.clear();
   std::vector<Eigen::Vector2d> occupied;
-  for (std::size_t i = 0; i < initial->p_first.size(); ++i) {
-    if (!initial->triangulated[i]) continue;
+  for (std::size_t i = 0; i < initial.p_first.size(); ++i) {
+    if (!initial.triangulated[i]) continue;
     features::PointAppearance appearance;
-    if (!appearance.cut(initial->first_image, initial->px_first[i])) continue;
+    if (!appearance.cut(initial.first_image, initial.px_first[i])) continue;
     const map::PointId id =
-        addNewPoint(initial->p_first[i], first.keyframe.id, std::move(appearance), &first);
-    first.keyframe.observations.push_back({id, initial->xy_first[i]});
-    second.keyframe.observations.push_back({id, initial->xy_second[i]});
+        addNewPoint(initial.p_first[i], first.keyframe.id, std::move(appearance), &first);
+    first.keyframe.observations.push_back({id, initial.xy_first[i]});
+    second.keyframe.observations.push_back({id, initial.xy_second[i]});
     first_kf.points.push_back(id);
     second_kf.points.push_back(id);
-    previous_measurements_.push_back({id, initial->px_second[i], initial->xy_second[i]});
-    occupied.push_back(initial->px_second[i]);
+    previous_measurements_.push_back({id, initial.px_second[i], initial.xy_second[i]});
+    occupied.push_back(initial.px_second[i]);
   }
   map_.addKeyframe(std::move(first_kf));
   map_.addKeyframe(std::move(second_kf));
   tracked_at_keyframe_ = static_cast<int>(previous_measurements_.size());
   state_ = TrackingState::kGood;
-  T_previous_world_ = T_before_previous_world_ = initial->T_second_first;
+  T_previous_world_ = T_before_previous_world_ = initial.T_second_first;
   previous_image_ = image;
   previous_timestamp_ = timestamp;
-  last_scene_depth_ = sceneDepth(initial->T_second_first);
+  last_scene_depth_ = sceneDepth(initial.T_second_first);
   result->has_pose = true;
-  result->T_cam_world = initial->T_second_first;
+  result->T_cam_world = initial.T_second_first;
   result->num_inliers = static_cast<int>(previous_measurements_.size());
   result->keyframes.push_back(std::move(first));
   // The second keyframe's free corners wait for the next keyframe to be matched with (nothing to

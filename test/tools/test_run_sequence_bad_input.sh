@@ -4,8 +4,9 @@
 #     (the same camera line as our layout; the Kalibr run as accurate as our layout's);
 #   - a misspelt `distortion_modle`, fx = 1e300: one-line errors, non-zero exit;
 #   - every frame rejected (calibration for another size, all black): non-zero exit, the reason;
-#   - a young map discarded after 30+ black frames: its poses in their own files, none lost,
-#     none mixed into trajectory.txt;
+#   - 36 black frames: a young map is found again after them, one map;
+#   - 36 black frames, then another place: a young map discarded when the new map starts there,
+#     its poses in their own files, none lost, none mixed into trajectory.txt;
 #   - a nan stamp: an error naming the line; reversed stamps: a warning, sorted outputs;
 #   - 16-bit PNGs holding 12-bit data: test/system/test_sixteen_bit_sequence.cpp; here only
 #     --bit-depth out of range;
@@ -99,11 +100,35 @@ expect_error "other image size" \
 expect_error "all black" "tracked nothing: all 10 frames were rejected: frame rejected: image has no texture" \
   "$bin/run_sequence" "$work/black" --out "$work/x" --quiet
 
-# A young map discarded after 36 black frames: each map's poses in its own files.
+# 36 black frames in the middle of the orbit: the young map is kept and found again after them.
 "$bin/render_sequence" --scene office_orbit --frames 150 --noise 1 --blackout 1.2:1.2 \
-  --out "$work/restart" --quiet
+  --out "$work/blackout" --quiet
+"$bin/run_sequence" "$work/blackout" --out "$work/blackout_out" --quiet > "$work/blackout.log" 2>&1 ||
+  { cat "$work/blackout.log"; fail "run with a blackout"; }
+$py - "$work/blackout_out" <<'PY'
+import csv, json, sys
+out = sys.argv[1]
+s = json.load(open(out + "/summary.json"))
+frames = list(csv.DictReader(open(out + "/frames.csv")))
+black = [int(f["frame"]) for f in frames if f["rejected"] == "1"]
+after = [f for f in frames if int(f["frame"]) > max(black) and f["state"] in ("good", "weak")]
+assert len(black) >= 30, len(black)
+assert s["map_restarts"] == 0, "the young map was discarded: %s" % s["maps"]
+assert len(after) >= 60, "not found again after the blackout: %d frames tracked" % len(after)
+print("blackout: one map, %d frames tracked after the %d black ones" % (len(after), len(black)))
+PY
+
+# 36 black frames, then another place (the orbit with other textures): a new map starts there and
+# the young map is discarded then; each map's poses in its own files.
+"$bin/render_sequence" --scene office_orbit --frames 60 --noise 1 --out "$work/place_a" --quiet
+"$bin/render_sequence" --scene office_orbit --frames 90 --noise 1 --seed 2 --blackout 0:1.2 \
+  --start-time 1003 --out "$work/place_b" --quiet
+mkdir -p "$work/restart/rgb"
+cp "$work"/place_a/rgb/*.png "$work"/place_b/rgb/*.png "$work/restart/rgb/"
+cp "$work/place_a/camera.yaml" "$work/restart/"
+grep -h -v '^#' "$work/place_a/rgb.txt" "$work/place_b/rgb.txt" > "$work/restart/rgb.txt"
 "$bin/run_sequence" "$work/restart" --out "$work/restart_out" --quiet > "$work/restart.log" 2>&1 ||
-  { cat "$work/restart.log"; fail "run with a blackout"; }
+  { cat "$work/restart.log"; fail "run with a blackout and another place"; }
 $py - "$work/restart_out" <<'PY'
 import csv, json, os, sys
 out = sys.argv[1]
@@ -126,7 +151,10 @@ assert not set(old) & set(new), "a stamp in two maps"
 assert sum(m["tracked"] for m in s["maps"]) == s["tracked"], s
 maps = {f["map"] for f in frames}
 assert maps == {str(k) for k in range(len(s["maps"]))}, maps
-print("blackout: map 0 %d poses (discarded), final map %d poses" % (len(old), len(new)))
+restart = next(f for f in frames if f["map"] == "1")
+assert restart["state"] in ("good", "weak") and "young map" in restart["message"], restart
+print("another place: map 0 %d poses (discarded at frame %s, where map 1 started), final map %d poses"
+      % (len(old), restart["frame"], len(new)))
 PY
 grep -qF "trajectory[_as_tracked]_map0_discarded.txt" "$work/restart.log" || fail "the discarded map's files not named in the log"
 

@@ -52,8 +52,10 @@ struct TrackerParams {
   /// While lost, a relocalisation request not answered within this many frames is sent again.
   int relocalisation_retry_frames = 30;
   /// Lost this many frames in a row with a map of fewer than `restart_below_keyframes`
-  /// keyframes (too young for place recognition to relocalise in): the map is discarded and
-  /// the tracker initialises again (FrameResult::map_restarted). 0 keyframes: never.
+  /// keyframes (too young for place recognition to relocalise in): the tracker initialises a
+  /// new map from the frames that follow, and once it starts the young map is discarded
+  /// (FrameResult::map_restarted). Until then the young map is kept, still lost, and may
+  /// relocalise; if no new map starts it stays the map. 0 keyframes: never.
   int restart_after_lost_frames = 15;
   int restart_below_keyframes = 30;
   /// A frame tracked with fewer than good_inliers (the flow could not carry it: a wide baseline
@@ -210,6 +212,10 @@ class Tracker {
   };
 
   void initialise(double timestamp, const features::ImagePyramid& image, FrameResult* result);
+  /// Builds the map from the initializer's two views (the frame's pose and both keyframes go
+  /// into `result`).
+  void startMap(const InitialMap& initial, double timestamp, const features::ImagePyramid& image,
+                FrameResult* result);
   void track(double timestamp, const features::ImagePyramid& image, FrameResult* result);
   MotionPrior estimatePrior(const features::ImagePyramid& image,
                             std::vector<cv::Point2f>* candidate_px,
@@ -303,8 +309,13 @@ class Tracker {
   void rejectFrame(const std::string& reason, FrameResult* result);
   void requestRelocalisation(double timestamp, const features::ImagePyramid& image,
                              FrameResult* result);
-  /// Counts the frames lost in a row and restarts a young map lost too long.
+  /// Counts the frames lost in a row; a young map lost too long starts the initialisation of
+  /// a new map beside it (TrackerParams::restart_after_lost_frames).
   void restartYoungLostMap(FrameResult* result);
+  /// Feeds the frame to the initialisation of the next map; when that map starts, the lost
+  /// young map is discarded.
+  void initialiseNextMap(double timestamp, const features::ImagePyramid& image,
+                         FrameResult* result);
 
   std::shared_ptr<const geometry::CameraModel> camera_;
   /// The camera that measures the frame being tracked: camera_, or with a rolling shutter
@@ -341,6 +352,8 @@ class Tracker {
   int rejected_in_row_ = 0;
   int mono16_bits_ = 0;
   int lost_in_row_ = 0;
+  /// A young map lost too long: the frames also go to the initializer, for the next map.
+  bool initialising_next_map_ = false;
   int tracked_at_keyframe_ = 0;  ///< Map points seen in the last keyframe (keyframe rule).
   /// Moving average (weight 0.2) of the tracked frames' share of inliers among the points found
   /// (recover_on_inlier_share_drop); 0 until a frame is tracked.
