@@ -5,6 +5,7 @@ Markdown table and a JSON file with the same figures. Called by `scripts/bench r
 library only. A sequence that fails gets its reason in its row; the others still run."""
 
 import argparse
+import copy
 import csv
 import datetime
 import json
@@ -27,6 +28,7 @@ class Sequence:
 
     def __init__(self, name, folder):
         self.name = name
+        self.label = name  # in the table: the name, and the run with --runs
         self.folder = folder
         self.layout = None  # TUM, EuRoC or KITTI
         self.dataset = None  # what run_sequence gets as DATASET
@@ -289,7 +291,7 @@ def table_row(sequence):
            f"{f['tracking_cpu_median_ms']:.1f} / {f['tracking_cpu_p95_ms']:.1f} ms")
     if f.get("keyframe_worker_cpu_median_ms") is not None:
         cpu += f" (+ {f['keyframe_worker_cpu_median_ms']:.1f} ms per keyframe in the worker)"
-    cells = [sequence.name, "-" if frames is None else str(frames),
+    cells = [sequence.label, "-" if frames is None else str(frames),
              number(f.get("first_tracked_frame"), 0), moving,
              tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB"),
              ("**failed**: " if sequence.failed else "") + "; ".join(sequence.notes)]
@@ -333,22 +335,35 @@ def main():
     parser.add_argument("--rate", type=float, default=0.0,
                         help="run_sequence --rate: 0 (default) feeds the frames as fast as "
                              "tracking goes, 1 at their camera's rate, as a live camera would")
+    parser.add_argument("--runs", type=int, default=1,
+                        help="runs of each sequence, one row each (threaded runs differ: the "
+                             "mapper's updates land at other frames)")
     arguments = parser.parse_args()
+    if arguments.runs < 1:
+        sys.exit("bench_real.py: --runs must be >= 1")
     if not arguments.data.is_dir():
         sys.exit(f"bench_real.py: no data folder '{arguments.data}'")
     arguments.out.parent.mkdir(parents=True, exist_ok=True)
     runs_dir = arguments.out.with_suffix("")  # real.md -> real/<sequence>/
     lines = header(arguments)
-    sequences = find_sequences(arguments.data)
-    for sequence in sequences:
-        if sequence.failed:
-            continue
-        print(f"[bench real] {sequence.name} ({sequence.layout})", flush=True)
-        out = run_sequence(sequence, arguments.bin_dir, runs_dir, arguments.timeout,
-                           arguments.config, arguments.rate)
-        if not sequence.failed:
-            evaluate(sequence, arguments.bin_dir, out)
-        print("  " + table_row(sequence), flush=True)
+    found = find_sequences(arguments.data)
+    sequences = []  # one per run: with --runs N, each sequence N times, its rows together
+    for sequence in found:
+        for run in range(1, arguments.runs + 1):
+            this_run = copy.deepcopy(sequence)
+            out_dir = runs_dir
+            if arguments.runs > 1:
+                this_run.label = f"{sequence.name} (run {run})"
+                out_dir = runs_dir / f"run{run}"
+            sequences.append(this_run)
+            if this_run.failed:
+                continue
+            print(f"[bench real] {this_run.label} ({this_run.layout})", flush=True)
+            out = run_sequence(this_run, arguments.bin_dir, out_dir, arguments.timeout,
+                               arguments.config, arguments.rate)
+            if not this_run.failed:
+                evaluate(this_run, arguments.bin_dir, out)
+            print("  " + table_row(this_run), flush=True)
     lines.append("| " + " | ".join(COLUMNS) + " |")
     lines.append("|" + "---|" * len(COLUMNS))
     lines += [table_row(s) for s in sequences]
@@ -359,7 +374,7 @@ def main():
     results = []
     for s in sequences:
         figures = {k: v for k, v in s.figures.items() if k != "frame_times"}
-        results.append({"sequence": s.name, "layout": s.layout,
+        results.append({"sequence": s.name, "label": s.label, "layout": s.layout,
                         "dataset": str(s.dataset) if s.dataset else None,
                         "calibration": str(s.calibration) if s.calibration else "dataset's own",
                         "failed": s.failed, "notes": s.notes, **figures})
