@@ -20,6 +20,14 @@ Scenario makeScenario(const std::string& name, std::uint32_t seed, const Scenari
     throw std::invalid_argument("only city_loop can be driven more than once (laps), not '" + name +
                                 "'");
   }
+  if (options.turn_rate_deg_s &&
+      !(*options.turn_rate_deg_s >= 5.0 && *options.turn_rate_deg_s <= 120.0)) {
+    throw std::invalid_argument("turn rate must be in [5, 120] deg/s");
+  }
+  if (options.turn_rate_deg_s && name.rfind("city_", 0) != 0) {
+    throw std::invalid_argument("a turn rate needs a drive: only the city_* scenes have it, not '" +
+                                name + "'");
+  }
   if (name == "city_block") return detail::makeCityBlock(seed, options);
   if (name == "city_loop") return detail::makeCityLoop(seed, options);
   if (name == "city_tour") return detail::makeCityTour(seed, options);

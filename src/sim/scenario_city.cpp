@@ -30,9 +30,11 @@ constexpr double kLaneOffset = 1.75;
 const double kKittiFovDeg = 2.0 * std::atan(1241.0 / 2.0 / 718.9) * 180.0 / M_PI;
 
 /// Fills in the drive: the camera's pose along the lane of `streets` (centre lines).
-void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, std::uint32_t seed) {
-  const auto route =
-      std::make_shared<CityRoute>(offsetRight(streets, kLaneOffset), DriveParams(), seed);
+void addDrive(Scenario& scenario, const std::vector<Eigen::Vector2d>& streets, std::uint32_t seed,
+              const ScenarioOptions& options) {
+  DriveParams drive;
+  if (options.turn_rate_deg_s) drive.turn_yaw_rate = *options.turn_rate_deg_s * M_PI / 180.0;
+  const auto route = std::make_shared<CityRoute>(offsetRight(streets, kLaneOffset), drive, seed);
   scenario.duration = route->duration();
   scenario.rate = 10.0;
   scenario.horizontal_fov_deg = kKittiFovDeg;
@@ -74,7 +76,7 @@ void buildCityAndDrive(Scenario& scenario, const CityGrid& grid,
                        const std::vector<Eigen::Vector2d>& streets, std::uint32_t seed,
                        const ScenarioOptions& options) {
   buildCity(scenario.scene, grid, streets, seed);
-  addDrive(scenario, streets, options.motion_seed.value_or(seed));
+  addDrive(scenario, streets, options.motion_seed.value_or(seed), options);
   if (options.traffic) addTraffic(scenario, grid, streets, options.traffic_seed.value_or(seed));
 }
 

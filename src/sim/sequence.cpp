@@ -102,11 +102,13 @@ SequenceRenderer::SequenceRenderer(const SequenceParams& params) : params_(param
   options.traffic_seed = params_.seed;
   options.motion_seed = params_.seed;
   options.laps = params_.laps;
+  options.turn_rate_deg_s = params_.turn_rate_deg_s;
   scenario_ = makeScenario(params_.scene, params_.scene_seed.value_or(params_.seed), options);
   if (params_.scene_seed && *params_.scene_seed != params_.seed) {
     // The same place, walked with another wobble: the motion of the scenario of `seed`.
     ScenarioOptions drive;
     drive.laps = params_.laps;
+    drive.turn_rate_deg_s = params_.turn_rate_deg_s;
     scenario_.T_world_cam = makeScenario(params_.scene, params_.seed, drive).T_world_cam;
   }
   if (params_.start_fraction > 0.0) {

@@ -47,6 +47,8 @@ const char* kUsage =
     "  --start-time S           stamp of the first frame (default 1000 s)\n"
     "  --traffic                city_* scenes: moving cars in the streets (oncoming, crossing,\n"
     "                           turning in ahead), from --seed; the tracker must reject them\n"
+    "  --turn-rate DEG_S        city_* scenes: the car's yaw rate in the turns (default ~29;\n"
+    "                           50: fast corners, ~65 px of image motion per frame at 10 Hz)\n"
     "  --quiet                  no progress output\n"
     "Camera effects (doc/sequences.md):\n"
     "  --rolling-shutter S      readout time top to bottom row (default 0: global shutter);\n"
@@ -90,6 +92,7 @@ sds::sim::SequenceParams parseParams(const sds::io::CommandLine& cl) {
   p.distortion = cl.text("distortion", "");
   p.color = cl.has("color");
   p.traffic = cl.has("traffic");
+  if (cl.has("turn-rate")) p.turn_rate_deg_s = cl.number("turn-rate", 0.0);
   p.start_time = cl.number("start-time", 1000.0);
   p.realism.noise_sigma = cl.number("noise", 0.0);
   p.realism.exposure_amplitude = cl.number("exposure", 0.0);
@@ -146,6 +149,7 @@ int run(const sds::io::CommandLine& cl) {
                          "start-time",
                          "quiet",
                          "traffic",
+                         "turn-rate",
                          "rolling-shutter",
                          "rolling-shutter-bands",
                          "vignetting",

@@ -1,6 +1,8 @@
 // Sequences: deterministic for a seed, the realism flags do what they say, the TUM folder holds
 // exactly the rendered frames, stamps and poses, and bad parameters are refused with a reason.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -233,6 +235,40 @@ TEST(Sequence, CityLoopLapsDriveTheWholeRouteAgainInTheSameCity) {
   EXPECT_THROW(makeScenario("city_block", 1, laps), std::invalid_argument);
   SequenceParams params = smallParams("courtyard_loop");
   params.laps = 2;
+  EXPECT_THROW(SequenceRenderer{params}, std::invalid_argument);
+}
+
+// --turn-rate: the car's yaw rate in the turns of a city drive. The peak over 0.1 s steps is the
+// rate asked (the turns are circular arcs driven at rate x radius); nothing else has a drive.
+TEST(Sequence, ACityDriveTakesItsCornersAtTheTurnRateAsked) {
+  const auto peak_yaw_rate_deg_s = [](const Scenario& scenario) {
+    double peak = 0.0;
+    for (double t = 0.0; t + 0.1 <= scenario.duration; t += 0.1) {
+      const Eigen::Vector3d a = scenario.T_world_cam(t).rotationMatrix() * Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d b =
+          scenario.T_world_cam(t + 0.1).rotationMatrix() * Eigen::Vector3d::UnitZ();
+      const double turn =
+          std::abs(std::atan2(a.x() * b.y() - a.y() * b.x(), a.x() * b.x() + a.y() * b.y()));
+      peak = std::max(peak, turn / 0.1 * 180.0 / M_PI);
+    }
+    return peak;
+  };
+  ScenarioOptions options;
+  const Scenario town = makeScenario("city_block", 1, options);
+  options.turn_rate_deg_s = 50.0;
+  const Scenario fast = makeScenario("city_block", 1, options);
+  EXPECT_NEAR(peak_yaw_rate_deg_s(town), 28.6, 2.0);
+  EXPECT_NEAR(peak_yaw_rate_deg_s(fast), 50.0, 2.0);
+  // The same streets, driven faster through the corners.
+  EXPECT_LT(fast.duration, town.duration);
+  EXPECT_LT((fast.T_world_cam(0.0).translation() - town.T_world_cam(0.0).translation()).norm(),
+            1e-9);
+  options.turn_rate_deg_s = 0.0;
+  EXPECT_THROW(makeScenario("city_block", 1, options), std::invalid_argument);
+  options.turn_rate_deg_s = 50.0;
+  EXPECT_THROW(makeScenario("office_pan", 1, options), std::invalid_argument);
+  SequenceParams params = smallParams("courtyard_loop");
+  params.turn_rate_deg_s = 50.0;
   EXPECT_THROW(SequenceRenderer{params}, std::invalid_argument);
 }
 

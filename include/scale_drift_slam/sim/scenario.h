@@ -35,6 +35,10 @@ struct ScenarioOptions {
   /// The route driven this many times, in the same city (city_loop only; the benchmark's long
   /// run, scripts/bench city).
   int laps = 1;
+  /// The car's yaw rate in the turns, degrees per second (city_* scenes only; unset: ~29, as a
+  /// car turns in town). The turn speed is this rate times the turn's radius (9-13 m): 50 deg/s
+  /// takes the corners at 8-11 m/s, 5 degrees and ~65 px of image motion per frame at 10 Hz.
+  std::optional<double> turn_rate_deg_s;
 };
 
 /// A scene and the camera's path through it. Built by makeScenario(); read-only afterwards except

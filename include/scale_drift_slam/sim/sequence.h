@@ -63,6 +63,8 @@ struct SequenceParams {
   /// sequence is that much shorter.
   double start_fraction = 0.0;
   int laps = 1;  ///< The route driven this many times (city_loop only; makeScenario()).
+  /// The car's yaw rate in the turns, deg/s (city_* only; ScenarioOptions::turn_rate_deg_s).
+  std::optional<double> turn_rate_deg_s;
   /// Moving cars in the streets (city_* scenes): from `seed`, clear of the camera's drive.
   bool traffic = false;
   RealismParams realism;
