@@ -341,6 +341,8 @@ def main():
     arguments = parser.parse_args()
     if arguments.runs < 1:
         sys.exit("bench_real.py: --runs must be >= 1")
+    if not arguments.rate >= 0:
+        sys.exit("bench_real.py: --rate must be >= 0 (0: as fast as tracking goes)")
     if not arguments.data.is_dir():
         sys.exit(f"bench_real.py: no data folder '{arguments.data}'")
     arguments.out.parent.mkdir(parents=True, exist_ok=True)
