@@ -33,21 +33,14 @@ std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int bor
 
 std::vector<cv::KeyPoint> FastCornerCache::detect(int threshold, int border) {
   const std::lock_guard<std::mutex> lock(mutex_);
-  if (threshold_ < 0 || threshold < threshold_ || border < border_) {
-    // The lowest threshold and the narrowest border asked for so far: it serves them all.
-    threshold_ = threshold_ < 0 ? threshold : std::min(threshold, threshold_);
-    border_ = border_ < 0 ? border : std::min(border, border_);
-    corners_ = detectFast(grey_, threshold_, border_);
+  Detection& detection = by_border_[border];
+  if (detection.threshold < 0 || threshold < detection.threshold) {
+    detection.threshold = threshold;
+    detection.corners = detectFast(grey_, threshold, border);
   }
-  const float x_end = static_cast<float>(grey_.cols - border);
-  const float y_end = static_cast<float>(grey_.rows - border);
   std::vector<cv::KeyPoint> corners;
-  for (const cv::KeyPoint& corner : corners_) {
-    const cv::Point2f& p = corner.pt;
-    if (corner.response >= static_cast<float>(threshold) && p.x >= border && p.y >= border &&
-        p.x < x_end && p.y < y_end) {
-      corners.push_back(corner);
-    }
+  for (const cv::KeyPoint& corner : detection.corners) {
+    if (corner.response >= static_cast<float>(threshold)) corners.push_back(corner);
   }
   return corners;
 }

@@ -141,7 +141,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
     grey = features::toGrey(image, encoding, mono16_bits_ > 0 ? mono16_bits_ : 16);
   } catch (const std::invalid_argument& e) {
     rejectFrame(e.what(), &result);
-    restartYoungLostMap(&result);
+    startNextMapAfterYoungMapLost(&result);
     return result;
   }
   // Stretch a dark or washed-out frame before anything looks at it (doc/frontend.md, step 1);
@@ -151,7 +151,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
       features::frameProblem(grey, camera_->width(), camera_->height(), params_.min_contrast);
   if (!problem.empty()) {
     rejectFrame(problem, &result);
-    restartYoungLostMap(&result);
+    startNextMapAfterYoungMapLost(&result);
     return result;
   }
   rejected_in_row_ = 0;
@@ -190,7 +190,7 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
       }
     }
   }
-  restartYoungLostMap(&result);
+  startNextMapAfterYoungMapLost(&result);
   if (result.has_pose && next_keyframe_id_ > 0) result.reference_keyframe = next_keyframe_id_ - 1;
   result.state = state_;
   if (result.has_pose) {
@@ -219,7 +219,7 @@ void Tracker::rejectFrame(const std::string& reason, FrameResult* result) {
   result->state = state_;
 }
 
-void Tracker::restartYoungLostMap(FrameResult* result) {
+void Tracker::startNextMapAfterYoungMapLost(FrameResult* result) {
   if (state_ != TrackingState::kLost) {
     lost_in_row_ = 0;
     initialising_next_map_ = false;  // found again (or a new map started)
@@ -244,12 +244,7 @@ void Tracker::restartYoungLostMap(FrameResult* result) {
 
 void Tracker::initialiseNextMap(double timestamp, const features::ImagePyramid& frame,
                                 FrameResult* result) {
-  // The frame as a fresh tracker would see it: with a corner cache of its own (the lost map's
-  // search filled the frame's at its threshold and border, which changes the corners at the
-  // border of the initializer's).
-  features::ImagePyramid image = frame;
-  image.fast_corners = std::make_shared<features::FastCornerCache>(image.base());
-  std::optional<InitialMap> initial = initializer_.addFrame(timestamp, image);
+  std::optional<InitialMap> initial = initializer_.addFrame(timestamp, frame);
   if (!initial) {
     result->message +=
         (result->message.empty() ? "" : "; ") + std::string("new map: ") + initializer_.status();
@@ -269,7 +264,7 @@ void Tracker::initialiseNextMap(double timestamp, const features::ImagePyramid& 
   result->keyframes.clear();  // the young map's, if any: its receivers drop it anyway
   result->loop_correction.reset();
   result->message = message;
-  startMap(*initial, timestamp, image, result);
+  startMap(*initial, timestamp, frame, result);
 }
 
 void Tracker::requestRelocalisation(double timestamp, const features::ImagePyramid& image,

@@ -3,6 +3,7 @@
 // initialisation": candidates "spread evenly over the image with a quadtree"), and a bucket grid
 // over the corners of a frame so that active search can ask for the corners inside a region.
 
+#include <map>
 #include <mutex>
 #include <utility>
 #include <vector>
@@ -25,24 +26,29 @@ struct FeatureDetectionParams {
 /// FAST corners (non-maximum suppressed) at least `border` pixels inside the image.
 std::vector<cv::KeyPoint> detectFast(const cv::Mat& grey, int threshold, int border);
 
-/// The FAST corners of one image, detected once for every threshold and border asked for after
-/// it: a corner's response is its FAST score, the highest threshold it passes, so the corners of
-/// a higher threshold are those of a lower one whose response reaches it (up to the non-maximum
-/// suppression next to the border). A frame asks for corners up to three times (active search,
-/// new features and the keyframe triangulation); each detection costs ~2 ms at 1241x376 on this
-/// machine. Thread-safe.
+/// The FAST corners of one image, detected once per border for every threshold asked for after
+/// it: a corner's response is its FAST score, the highest threshold it passes, and the
+/// non-maximum suppression keeps a corner only if no neighbour scores higher, so the corners of
+/// a higher threshold are exactly those of a lower one whose response reaches it. (A border is
+/// not filtered from a narrower one: the suppression next to it differs.) A frame asks for
+/// corners up to three times (active search, new features and the keyframe triangulation);
+/// each detection costs ~2 ms at 1241x376 on this machine. The answer is detectFast's, whoever
+/// asked first. Thread-safe.
 class FastCornerCache {
  public:
   explicit FastCornerCache(cv::Mat grey) : grey_(std::move(grey)) {}
-  /// detectFast(grey, threshold, border), filtered from the detection kept, which is made again
-  /// at the lowest threshold and narrowest border asked for so far when this asks for less.
+  /// detectFast(grey, threshold, border), filtered from the detection kept for the border,
+  /// which is made again at the lower threshold when this asks for one below it.
   std::vector<cv::KeyPoint> detect(int threshold, int border);
 
  private:
+  struct Detection {
+    int threshold = -1;  ///< -1: nothing detected yet.
+    std::vector<cv::KeyPoint> corners;
+  };
   std::mutex mutex_;
   cv::Mat grey_;
-  int threshold_ = -1, border_ = -1;  ///< Of corners_; -1: nothing detected yet.
-  std::vector<cv::KeyPoint> corners_;
+  std::map<int, Detection> by_border_;
 };
 
 /// Up to `max_features` corners spread over the image: the image is split recursively into

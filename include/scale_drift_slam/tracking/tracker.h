@@ -311,7 +311,7 @@ class Tracker {
                              FrameResult* result);
   /// Counts the frames lost in a row; a young map lost too long starts the initialisation of
   /// a new map beside it (TrackerParams::restart_after_lost_frames).
-  void restartYoungLostMap(FrameResult* result);
+  void startNextMapAfterYoungMapLost(FrameResult* result);
   /// Feeds the frame to the initialisation of the next map; when that map starts, the lost
   /// young map is discarded.
   void initialiseNextMap(double timestamp, const features::ImagePyramid& image,
