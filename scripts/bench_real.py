@@ -86,6 +86,78 @@ def fail(sequence, reason):
     sequence.notes.append(reason)
 
 
+# --- tracking instructions per frame (--instructions) ------------------------------------------
+
+def inline_config(config, out):
+    """The parameters with the mapping thread off (system.mapping_thread: false): the run is then
+    deterministic and every frame's work is the tracker's own."""
+    lines = config.read_text().splitlines() if config else []
+    kept, in_system, has_system = [], False, False
+    for line in lines:
+        top_level = line[:1] not in ("", " ", "#")
+        if top_level:
+            in_system = line.split(":", 1)[0].strip() == "system"
+        if in_system and line.strip().startswith("mapping_thread:"):
+            continue
+        kept.append(line)
+        if top_level and in_system:
+            has_system = True
+            kept.append("  mapping_thread: false")
+    if not has_system:
+        kept += ["system:", "  mapping_thread: false"]
+    path = out / "inline_config.yaml"
+    path.write_text("\n".join(kept) + "\n")
+    return path
+
+
+def count_instructions(sequence, bin_dir, out_dir, timeout, config=None):
+    """Runs the sequence inline under callgrind, one profile dump per Tracker::processFrame, and
+    keeps the median instructions of the frames that made no keyframe and of those that did:
+    a count that does not depend on the machine's load (valgrind must be installed)."""
+    out = out_dir / sequence.name.replace("/", "_") / "instructions"
+    out.mkdir(parents=True, exist_ok=True)
+    for stale in out.glob("callgrind.out*"):
+        stale.unlink()
+    command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out / 'callgrind.out'}",
+               "--toggle-collect=*Tracker::processFrame*", "--dump-after=*Tracker::processFrame*",
+               str(bin_dir / "run_sequence"), str(sequence.dataset), "--out", str(out / "run"),
+               "--quiet", "--config", str(inline_config(config, out))]
+    if sequence.calibration:
+        command += ["--calib", str(sequence.calibration)]
+    with open(out / "valgrind.log", "w") as log:
+        try:
+            subprocess.run(command, stdout=log, stderr=subprocess.STDOUT, timeout=timeout)
+        except FileNotFoundError:
+            sequence.notes.append("--instructions needs valgrind (apt install valgrind)")
+            return
+        except subprocess.TimeoutExpired:
+            sequence.notes.append(f"callgrind run timed out after {timeout:.0f} s")
+            return
+    per_call = {}
+    for dump in out.glob("callgrind.out.*"):
+        number_part = dump.name.rsplit(".", 1)[1].split("-")[0]
+        if not number_part.isdigit():
+            continue
+        for line in dump.read_text(errors="replace").splitlines():
+            if line.startswith(("summary:", "totals:")):
+                per_call[int(number_part)] = int(line.split()[1])
+                break
+    frames_csv = out / "run" / "frames.csv"
+    if not per_call or not frames_csv.exists():
+        sequence.notes.append("callgrind run gave no per-frame counts (see instructions/valgrind.log)")
+        return
+    frames = read_frames_csv(frames_csv)
+    ordinary, keyframe = [], []
+    for call, count in per_call.items():  # dump N: the N-th frame (frames.csv row N - 1)
+        if 1 <= call <= len(frames):
+            made_keyframe = int(frames[call - 1].get("keyframes") or 0) > 0
+            (keyframe if made_keyframe else ordinary).append(count / 1e6)
+    median = lambda values: sorted(values)[len(values) // 2] if values else None
+    sequence.figures["instructions_ordinary_frame_median_m"] = median(ordinary)
+    sequence.figures["instructions_keyframe_frame_median_m"] = median(keyframe)
+    sequence.figures["instructions_frames"] = [len(ordinary), len(keyframe)]
+
+
 # --- reading the tools' outputs --------------------------------------------------------------
 
 
@@ -268,13 +340,14 @@ def evaluate(sequence, bin_dir, out):
 
 COLUMNS = ["sequence", "frames", "first tracked", "moving from (GT)", "tracked", "ATE % of path",
            "scale per tenth", "drift / 100 m", "CPU median / p95", "peak memory", "notes"]
+INSTRUCTION_COLUMN = "instructions per frame (inline): ordinary / keyframe"
 
 
 def number(value, digits=1, unit=""):
     return "-" if value is None else f"{value:.{digits}f}{unit}"
 
 
-def table_row(sequence):
+def table_row(sequence, with_instructions=False):
     f = sequence.figures
     frames = f.get("frames")
     tracked = "-" if frames is None else f"{f['tracked']}/{frames} ({f['tracked_percent']:.1f} %)"
@@ -293,8 +366,14 @@ def table_row(sequence):
         cpu += f" (+ {f['keyframe_worker_cpu_median_ms']:.1f} ms per keyframe in the worker)"
     cells = [sequence.label, "-" if frames is None else str(frames),
              number(f.get("first_tracked_frame"), 0), moving,
-             tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB"),
-             ("**failed**: " if sequence.failed else "") + "; ".join(sequence.notes)]
+             tracked, ate, scales, drift, cpu, number(f.get("peak_memory_mib"), 0, " MiB")]
+    if with_instructions:
+        counts = f.get("instructions_frames", [0, 0])
+        cells.append(f"{number(f.get('instructions_ordinary_frame_median_m'), 1, ' M')} "
+                     f"({counts[0]} frames) / "
+                     f"{number(f.get('instructions_keyframe_frame_median_m'), 1, ' M')} "
+                     f"({counts[1]})")
+    cells.append(("**failed**: " if sequence.failed else "") + "; ".join(sequence.notes))
     return "| " + " | ".join(c.replace("|", "/").replace("\n", " ") for c in cells) + " |"
 
 
@@ -335,6 +414,10 @@ def main():
     parser.add_argument("--rate", type=float, default=0.0,
                         help="run_sequence --rate: 0 (default) feeds the frames as fast as "
                              "tracking goes, 1 at their camera's rate, as a live camera would")
+    parser.add_argument("--instructions", action="store_true",
+                        help="also run each sequence inline under callgrind and give the "
+                             "median tracking instructions of a frame with and without a "
+                             "keyframe (independent of the machine's load; needs valgrind)")
     parser.add_argument("--runs", type=int, default=1,
                         help="runs of each sequence, one row each (threaded runs differ: the "
                              "mapper's updates land at other frames)")
@@ -365,10 +448,14 @@ def main():
                                arguments.config, arguments.rate)
             if not this_run.failed:
                 evaluate(this_run, arguments.bin_dir, out)
-            print("  " + table_row(this_run), flush=True)
-    lines.append("| " + " | ".join(COLUMNS) + " |")
-    lines.append("|" + "---|" * len(COLUMNS))
-    lines += [table_row(s) for s in sequences]
+            if arguments.instructions and run == 1 and not this_run.failed:
+                count_instructions(this_run, arguments.bin_dir, out_dir,
+                                   arguments.timeout * 20, arguments.config)
+            print("  " + table_row(this_run, arguments.instructions), flush=True)
+    columns = COLUMNS[:-1] + ([INSTRUCTION_COLUMN] if arguments.instructions else []) + ["notes"]
+    lines.append("| " + " | ".join(columns) + " |")
+    lines.append("|" + "---|" * len(columns))
+    lines += [table_row(s, arguments.instructions) for s in sequences]
     lines.append("")
     lines.append(f"Per-sequence outputs (run.log, time.txt, frames.csv, summary.json, "
                  f"evaluation.json) in `{runs_dir}/`.")

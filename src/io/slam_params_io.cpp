@@ -92,6 +92,7 @@ std::vector<Field> fieldsOf(system::SlamParams& p) {
       {"motion_prior", "predict_flow", &t.motion_prior.predict_flow},
       {"motion_prior", "candidate_max_forward_backward_px",
        &t.motion_prior.candidate_max_forward_backward_px},
+      {"motion_prior", "candidate_flow_window", &t.motion_prior.candidate_flow_window},
       {"motion_prior", "min_tracks", &t.motion_prior.min_tracks},
       {"motion_prior", "max_tracks", &t.motion_prior.max_tracks},
       {"motion_prior", "min_rotation_sigma", &t.motion_prior.min_rotation_sigma},

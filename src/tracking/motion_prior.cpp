@@ -22,6 +22,9 @@ void MotionPriorParams::validate() const {
   if (!std::isfinite(candidate_max_forward_backward_px)) {
     throw std::invalid_argument("motion_prior.candidate_max_forward_backward_px must be finite");
   }
+  if (candidate_flow_window != 0 && (candidate_flow_window < 5 || candidate_flow_window % 2 == 0)) {
+    throw std::invalid_argument("motion_prior.candidate_flow_window must be 0 or odd and >= 5");
+  }
 }
 
 namespace {
@@ -57,6 +60,17 @@ std::vector<cv::Point2f> predictedPixels(const std::vector<FlowSeed>& seeds,
   return start;
 }
 
+OpticalFlowParams candidateFlowParams(const MotionPriorParams& params) {
+  OpticalFlowParams flow = params.flow;
+  if (params.candidate_flow_window > 0) flow.window = params.candidate_flow_window;
+  return flow;
+}
+
+std::vector<cv::Point2f> slice(const std::vector<cv::Point2f>& points, std::size_t begin,
+                               std::size_t end) {
+  return std::vector<cv::Point2f>(points.begin() + begin, points.begin() + end);
+}
+
 Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
   Eigen::Matrix<double, 6, 1> d;
   d << Eigen::Vector3d::Constant(rotation * rotation),
@@ -68,8 +82,33 @@ Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
 
 MotionPriorEstimator::MotionPriorEstimator(
     const MotionPriorParams& params, const features::MotionOnlyBundleAdjustmentParams& motion_ba)
-    : params_(params), motion_ba_(motion_ba), flow_(params.flow) {
+    : params_(params),
+      motion_ba_(motion_ba),
+      flow_(params.flow),
+      candidate_flow_(candidateFlowParams(params)) {
   params_.validate();
+}
+
+void MotionPriorEstimator::trackSeedsAndCandidates(
+    const features::ImagePyramid& previous, const features::ImagePyramid& current,
+    const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>* start,
+    std::size_t num_seeds, std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) {
+  const std::size_t n = from.size();
+  std::vector<cv::Point2f> candidate_to;
+  std::vector<unsigned char> candidate_ok;
+  if (start) {
+    const std::vector<cv::Point2f> seed_start = slice(*start, 0, num_seeds);
+    const std::vector<cv::Point2f> candidate_start = slice(*start, num_seeds, n);
+    flow_.track(previous, current, slice(from, 0, num_seeds), to, ok, &seed_start);
+    candidate_flow_.track(previous, current, slice(from, num_seeds, n), &candidate_to,
+                          &candidate_ok, &candidate_start);
+  } else {
+    flow_.track(previous, current, slice(from, 0, num_seeds), to, ok);
+    candidate_flow_.track(previous, current, slice(from, num_seeds, n), &candidate_to,
+                          &candidate_ok);
+  }
+  to->insert(to->end(), candidate_to.begin(), candidate_to.end());
+  ok->insert(ok->end(), candidate_ok.begin(), candidate_ok.end());
 }
 
 MotionPrior MotionPriorEstimator::fallback(const geometry::SE3& T_guess, double scene_depth) const {
@@ -101,9 +140,9 @@ MotionPrior MotionPriorEstimator::estimate(
   std::vector<cv::Point2f> start = from;
   if (params_.predict_flow) {
     start = predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera);
-    flow_.track(previous, current, from, &to, &ok, &start);
+    trackSeedsAndCandidates(previous, current, from, &start, picked.size(), &to, &ok);
   } else {
-    flow_.track(previous, current, from, &to, &ok);
+    trackSeedsAndCandidates(previous, current, from, nullptr, picked.size(), &to, &ok);
   }
   MotionPrior prior = priorFromTracks(picked, to, ok, T_guess, scene_depth, camera);
   // A weak prior (fewer inliers than half the seeds' tracks, or none) and the image's shift far
@@ -119,7 +158,8 @@ MotionPrior MotionPriorEstimator::estimate(
       shifted[i] = from[i] + by;
     std::vector<cv::Point2f> shifted_to;
     std::vector<unsigned char> shifted_ok;
-    flow_.track(previous, current, from, &shifted_to, &shifted_ok, &shifted);
+    trackSeedsAndCandidates(previous, current, from, &shifted, picked.size(), &shifted_to,
+                            &shifted_ok);
     const MotionPrior from_shift =
         priorFromTracks(picked, shifted_to, shifted_ok, T_guess, scene_depth, camera);
     if (from_shift.num_tracks > prior.num_tracks) {
@@ -133,8 +173,8 @@ MotionPrior MotionPriorEstimator::estimate(
   if (params_.candidate_max_forward_backward_px > 0.0 &&
       !(params_.flow.method == FlowMethod::kLucasKanade &&
         params_.flow.max_forward_backward_px > 0.0)) {
-    flow_.checkBackward(previous, current, extra_px, *extra_tracked, extra_ok,
-                        params_.candidate_max_forward_backward_px);
+    candidate_flow_.checkBackward(previous, current, extra_px, *extra_tracked, extra_ok,
+                                  params_.candidate_max_forward_backward_px);
   }
   return prior;
 }

@@ -155,9 +155,10 @@ FrameResult Tracker::processFrame(double timestamp, const cv::Mat& image,
     return result;
   }
   rejected_in_row_ = 0;
-  const features::ImagePyramid pyramid =
-      features::buildPyramid(grey, params_.pyramid_levels, params_.motion_prior.flow.window,
-                             params_.motion_prior.flow.photometric_radius);
+  const features::ImagePyramid pyramid = features::buildPyramid(
+      grey, params_.pyramid_levels,
+      std::max(params_.motion_prior.flow.window, params_.motion_prior.candidate_flow_window),
+      params_.motion_prior.flow.photometric_radius);
   result.times.prepare = stage.lapMs();
   try {
     if (state_ == TrackingState::kInitializing) {

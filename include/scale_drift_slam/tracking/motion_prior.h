@@ -38,6 +38,12 @@ struct MotionPriorParams {
   /// Their tracks feed the inverse-depth filters directly, with no robust cost to reject a track
   /// that slid along its epipolar line, and the points they are promoted to are then wrong.
   double candidate_max_forward_backward_px = 2.0;
+  /// Lucas-Kanade window of the candidates' flow, forward and backward (pixels, odd; 0:
+  /// flow.window). They are FAST corners, followed a frame at a time from a predicted start and
+  /// vetted both ways, and they are most of the points a frame flows: with OpenCV's 8-pixel SIMD
+  /// rows a 9-pixel window costs ~35 % less than an 11-pixel one (doc/benchmarks.md, "The
+  /// candidates' flow window").
+  int candidate_flow_window = 9;
   void validate() const;
 };
 
@@ -60,12 +66,12 @@ class MotionPriorEstimator {
                        const features::MotionOnlyBundleAdjustmentParams& motion_ba);
 
   /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
-  /// `extra_tracked` / `extra_ok`) from `previous` into `current` in one flow call and estimates
-  /// the prior. `T_guess` is the constant-velocity guess of the current pose, `T_previous` the
-  /// previous frame's pose; `scene_depth` scales the floors. When the pose from the flow is weak
-  /// (inliers fewer than half the seeds' tracks) and the image's shift is far from the flow's
-  /// start (flow.shift_retry_px), the points are tracked again from the shift and the set of
-  /// tracks whose pose has more inliers is kept.
+  /// `extra_tracked` / `extra_ok`) from `previous` into `current` (the candidates with their own
+  /// window) and estimates the prior. `T_guess` is the constant-velocity guess of the current pose,
+  /// `T_previous` the previous frame's pose; `scene_depth` scales the floors. When the pose from
+  /// the flow is weak (inliers fewer than half the seeds' tracks) and the image's shift is far from
+  /// the flow's start (flow.shift_retry_px), the points are tracked again from the shift and the
+  /// set of tracks whose pose has more inliers is kept.
   MotionPrior estimate(const features::ImagePyramid& previous,
                        const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
                        const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
@@ -105,10 +111,18 @@ class MotionPriorEstimator {
                             const std::vector<cv::Point2f>& from,
                             const std::vector<cv::Point2f>& start);
 
+  /// Tracks `from` (the seeds first, then the candidates) each with its own flow.
+  void trackSeedsAndCandidates(const features::ImagePyramid& previous,
+                               const features::ImagePyramid& current,
+                               const std::vector<cv::Point2f>& from,
+                               const std::vector<cv::Point2f>* start, std::size_t num_seeds,
+                               std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok);
+
   MotionPriorParams params_;
   features::MotionOnlyBundleAdjustmentParams motion_ba_;
-  OpticalFlow flow_;
-  cv::Mat shift_window_;  ///< The phase correlation's Hanning window, reused between frames.
+  OpticalFlow flow_;            ///< The map points' (seeds') flow.
+  OpticalFlow candidate_flow_;  ///< The candidates' (MotionPriorParams::candidate_flow_window).
+  cv::Mat shift_window_;        ///< The phase correlation's Hanning window, reused between frames.
 };
 
 }  // namespace scale_drift_slam::tracking
