@@ -119,7 +119,9 @@ def count_instructions(sequence, bin_dir, out_dir, timeout, config=None):
     for stale in out.glob("callgrind.out*"):
         stale.unlink()
     command = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out / 'callgrind.out'}",
-               "--toggle-collect=*Tracker::processFrame*", "--dump-after=*Tracker::processFrame*",
+               # (callgrind 3.19 dumps nothing when the two patterns are the same string)
+               "--toggle-collect=scale_drift_slam::tracking::Tracker::processFrame*",
+               "--dump-after=*Tracker::processFrame*",
                str(bin_dir / "run_sequence"), str(sequence.dataset), "--out", str(out / "run"),
                "--quiet", "--config", str(inline_config(config, out))]
     if sequence.calibration:
@@ -133,6 +135,16 @@ def count_instructions(sequence, bin_dir, out_dir, timeout, config=None):
         except subprocess.TimeoutExpired:
             sequence.notes.append(f"callgrind run timed out after {timeout:.0f} s")
             return
+    figures = instruction_figures(out)
+    if figures is None:
+        sequence.notes.append("callgrind run gave no per-frame counts (see instructions/valgrind.log)")
+        return
+    sequence.figures.update(figures)
+
+
+def instruction_figures(out):
+    """The median instructions (millions) of the tracked frames that made no keyframe and of
+    those that made one, from the per-frame dumps in out (dump N: the N-th frame)."""
     per_call = {}
     for dump in out.glob("callgrind.out.*"):
         number_part = dump.name.rsplit(".", 1)[1].split("-")[0]
@@ -144,18 +156,17 @@ def count_instructions(sequence, bin_dir, out_dir, timeout, config=None):
                 break
     frames_csv = out / "run" / "frames.csv"
     if not per_call or not frames_csv.exists():
-        sequence.notes.append("callgrind run gave no per-frame counts (see instructions/valgrind.log)")
-        return
+        return None
     frames = read_frames_csv(frames_csv)
     ordinary, keyframe = [], []
-    for call, count in per_call.items():  # dump N: the N-th frame (frames.csv row N - 1)
-        if 1 <= call <= len(frames):
+    for call, count in per_call.items():
+        if 1 <= call <= len(frames) and frames[call - 1]["state"] in TRACKING_STATES:
             made_keyframe = int(frames[call - 1].get("keyframes") or 0) > 0
             (keyframe if made_keyframe else ordinary).append(count / 1e6)
-    median = lambda values: sorted(values)[len(values) // 2] if values else None
-    sequence.figures["instructions_ordinary_frame_median_m"] = median(ordinary)
-    sequence.figures["instructions_keyframe_frame_median_m"] = median(keyframe)
-    sequence.figures["instructions_frames"] = [len(ordinary), len(keyframe)]
+    median = lambda values: round(sorted(values)[len(values) // 2], 1) if values else None
+    return {"instructions_ordinary_frame_median_m": median(ordinary),
+            "instructions_keyframe_frame_median_m": median(keyframe),
+            "instructions_frames": [len(ordinary), len(keyframe)]}
 
 
 # --- reading the tools' outputs --------------------------------------------------------------

@@ -89,6 +89,8 @@ TEST(SlamParamsIo, RefusesTyposAndBadValues) {
   expectFailure("flow:\n  min_step_px: 0\n", "flow.min_step_px");
   expectFailure("flow:\n  min_step_px: 1.5\n", "flow.min_step_px");
   expectFailure("search:\n  min_ncc: 2\n", "min_ncc");
+  expectFailure("motion_prior:\n  candidate_flow_window: 8\n", "candidate_flow_window");
+  expectFailure("motion_prior:\n  candidate_flow_window: 3\n", "candidate_flow_window");
   expectFailure("[1, 2]", "mapping of sections");
   expectFailure("tracker: [", "not valid YAML");
   EXPECT_THROW(loadSlamParams("/nonexistent/params.yaml"), std::runtime_error);
