@@ -117,6 +117,33 @@ TEST(RollingShutterCamera, ProjectionJacobianMatchesNumericDerivativeAlongTheRow
   }
 }
 
+TEST(RollingShutterCamera, APointFarOutsideTheFrameStaysOutside) {
+  // A point beside the camera, almost in its image plane, projects ~40 000 px off the image; the
+  // row "time" of such a pixel is over a second away from the frame's, and a panning camera's
+  // rotation over that time would bring the point into view. Found in a 150 deg/s pan (office_pan
+  // with a 20 ms readout): such a point of the local map was matched inside the image, and its
+  // 49 000 px residual turned the motion-only BA 4 degrees away, losing 3-94 frames. Rows beyond
+  // the frame are seen from the camera of the nearest row, so such a point stays where it is.
+  const auto global = makeCameraModel(rollingShutterVga(0.0));
+  const auto rolling = frameCamera(makeCameraModel(rollingShutterVga(0.02)),
+                                   Eigen::Vector3d(0.0, 1.6, 0.5), Eigen::Vector3d(0.1, 0, 0), 2.0);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> side(-1.5, 1.5), depth(0.005, 0.3);
+  int outside = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d p(side(rng), side(rng), depth(rng));
+    const auto far = global->project(p);
+    if (far && global->isInImage(*far, -200.0)) continue;  // within 200 px of the image
+    ++outside;
+    const auto px = rolling->project(p);
+    EXPECT_FALSE(px && rolling->isInImage(*px)) << p.transpose() << " -> " << px->transpose();
+  }
+  EXPECT_GT(outside, 1000);
+  // The case the pan met, exactly.
+  const auto seen = rolling->project(Eigen::Vector3d(-1.364, 0.891, 0.017));
+  EXPECT_FALSE(seen && rolling->isInImage(*seen));
+}
+
 TEST(RollingShutterCamera, AGlobalShutterOrAStillCameraIsTheCameraItself) {
   const std::shared_ptr<const CameraModel> global = makeCameraModel(rollingShutterVga(0.0));
   const Eigen::Vector3d moving(0.5, 0.0, 0.0);

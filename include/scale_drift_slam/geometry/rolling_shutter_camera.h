@@ -38,6 +38,9 @@ class RollingShutterCamera : public CameraModel {
 
   /// The time of a row relative to the frame's stamp (s).
   double rowTime(double y) const;
+  /// The time a pixel of row y is exposed at: rowTime of y clamped to the frame's rows (a point
+  /// projected above or below the image is seen from the camera of the first or last row).
+  double exposureTime(double y) const;
   /// The rotation from the stamp's camera frame to the camera frame of time `tau`.
   Eigen::Matrix3d rotationAt(double tau) const;
   /// A point of the stamp's camera frame in the camera frame of time `tau`.
