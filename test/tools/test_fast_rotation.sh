@@ -19,8 +19,8 @@
 # a local-map point beside the camera, ~40 000 px off the image, was projected into it because its
 # row time was taken beyond the frame's readout, and its match turned the pose 4 degrees away
 # (fixed: RollingShutterCamera::exposureTime; test RollingShutterCamera.APointFarOutsideTheFrame
-# StaysOutside). After the fix 266 of 266 in 35 of 35 threaded runs (doc/benchmarks.md,
-# "A point far outside the frame").
+# StaysOutside). After the fix 266 of 266 in 40 of 40 threaded runs, 5 of them beside two busy
+# loops (doc/benchmarks.md, "A point far outside the frame").
 set -euo pipefail
 bin="${SDS_BIN_DIR:?}"
 work="${SDS_TEST_OUTPUT_DIR:?}/fast_rotation"
