@@ -89,28 +89,6 @@ MotionPriorEstimator::MotionPriorEstimator(
   params_.validate();
 }
 
-void MotionPriorEstimator::trackSeedsAndCandidates(
-    const features::ImagePyramid& previous, const features::ImagePyramid& current,
-    const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>* start,
-    std::size_t num_seeds, std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok) {
-  const std::size_t n = from.size();
-  std::vector<cv::Point2f> candidate_to;
-  std::vector<unsigned char> candidate_ok;
-  if (start) {
-    const std::vector<cv::Point2f> seed_start = slice(*start, 0, num_seeds);
-    const std::vector<cv::Point2f> candidate_start = slice(*start, num_seeds, n);
-    flow_.track(previous, current, slice(from, 0, num_seeds), to, ok, &seed_start);
-    candidate_flow_.track(previous, current, slice(from, num_seeds, n), &candidate_to,
-                          &candidate_ok, &candidate_start);
-  } else {
-    flow_.track(previous, current, slice(from, 0, num_seeds), to, ok);
-    candidate_flow_.track(previous, current, slice(from, num_seeds, n), &candidate_to,
-                          &candidate_ok);
-  }
-  to->insert(to->end(), candidate_to.begin(), candidate_to.end());
-  ok->insert(ok->end(), candidate_ok.begin(), candidate_ok.end());
-}
-
 MotionPrior MotionPriorEstimator::fallback(const geometry::SE3& T_guess, double scene_depth) const {
   MotionPrior prior;
   prior.T_cur_world = T_guess;
@@ -135,41 +113,47 @@ MotionPrior MotionPriorEstimator::estimate(
   for (const FlowSeed& seed : picked)
     from.push_back(seed.px);
   from.insert(from.end(), extra_px.begin(), extra_px.end());
+  // The seeds first: the prior rests on them alone. The candidates follow once, from where the
+  // chosen seeds' tracks started (the constant-velocity prediction, or the image's shift).
+  const std::size_t num_seeds = picked.size();
+  const std::vector<cv::Point2f> start =
+      params_.predict_flow
+          ? predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera)
+          : from;
+  const std::vector<cv::Point2f> seed_from = slice(from, 0, num_seeds);
+  const std::vector<cv::Point2f> seed_start = slice(start, 0, num_seeds);
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
-  std::vector<cv::Point2f> start = from;
-  if (params_.predict_flow) {
-    start = predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera);
-    trackSeedsAndCandidates(previous, current, from, &start, picked.size(), &to, &ok);
-  } else {
-    trackSeedsAndCandidates(previous, current, from, nullptr, picked.size(), &to, &ok);
-  }
+  flow_.track(previous, current, seed_from, &to, &ok, params_.predict_flow ? &seed_start : nullptr);
   MotionPrior prior = priorFromTracks(picked, to, ok, T_guess, scene_depth, camera);
   // A weak prior (fewer inliers than half the seeds' tracks, or none) and the image's shift far
   // from where the flow started: the motion was not the expected one (a jerk, a low frame rate).
-  // The points again from the shift; the pose with more inliers wins.
-  const long seed_tracks = std::count(ok.begin(), ok.begin() + picked.size(), 1);
+  // The seeds again from the shift; the pose with more inliers wins, and the candidates start
+  // from the shift when it does.
+  const long seed_tracks = std::count(ok.begin(), ok.end(), 1);
   const bool weak = !prior.from_flow || 2 * prior.num_tracks < seed_tracks;
   const cv::Point2d shift = weak ? shiftAwayFrom(previous, current, from, start) : cv::Point2d();
+  bool from_shift_won = false;
+  const cv::Point2f by(static_cast<float>(shift.x), static_cast<float>(shift.y));
   if (shift != cv::Point2d(0.0, 0.0)) {
-    std::vector<cv::Point2f> shifted(from.size());
-    const cv::Point2f by(static_cast<float>(shift.x), static_cast<float>(shift.y));
-    for (std::size_t i = 0; i < from.size(); ++i)
-      shifted[i] = from[i] + by;
+    std::vector<cv::Point2f> shifted(num_seeds);
+    for (std::size_t i = 0; i < num_seeds; ++i)
+      shifted[i] = seed_from[i] + by;
     std::vector<cv::Point2f> shifted_to;
     std::vector<unsigned char> shifted_ok;
-    trackSeedsAndCandidates(previous, current, from, &shifted, picked.size(), &shifted_to,
-                            &shifted_ok);
+    flow_.track(previous, current, seed_from, &shifted_to, &shifted_ok, &shifted);
     const MotionPrior from_shift =
         priorFromTracks(picked, shifted_to, shifted_ok, T_guess, scene_depth, camera);
-    if (from_shift.num_tracks > prior.num_tracks) {
-      prior = from_shift;
-      to = std::move(shifted_to);
-      ok = std::move(shifted_ok);
-    }
+    from_shift_won = from_shift.num_tracks > prior.num_tracks;
+    if (from_shift_won) prior = from_shift;
   }
-  extra_tracked->assign(to.begin() + picked.size(), to.end());
-  extra_ok->assign(ok.begin() + picked.size(), ok.end());
+  std::vector<cv::Point2f> candidate_start = slice(start, num_seeds, from.size());
+  if (from_shift_won) {
+    for (std::size_t i = 0; i < extra_px.size(); ++i)
+      candidate_start[i] = extra_px[i] + by;
+  }
+  candidate_flow_.track(previous, current, extra_px, extra_tracked, extra_ok,
+                        params_.predict_flow || from_shift_won ? &candidate_start : nullptr);
   if (params_.candidate_max_forward_backward_px > 0.0 &&
       !(params_.flow.method == FlowMethod::kLucasKanade &&
         params_.flow.max_forward_backward_px > 0.0)) {

@@ -65,13 +65,13 @@ class MotionPriorEstimator {
   MotionPriorEstimator(const MotionPriorParams& params,
                        const features::MotionOnlyBundleAdjustmentParams& motion_ba);
 
-  /// Tracks `seeds` (plus `extra_px`, e.g. the feature candidates, returned through
-  /// `extra_tracked` / `extra_ok`) from `previous` into `current` (the candidates with their own
-  /// window) and estimates the prior. `T_guess` is the constant-velocity guess of the current pose,
-  /// `T_previous` the previous frame's pose; `scene_depth` scales the floors. When the pose from
-  /// the flow is weak (inliers fewer than half the seeds' tracks) and the image's shift is far from
-  /// the flow's start (flow.shift_retry_px), the points are tracked again from the shift and the
-  /// set of tracks whose pose has more inliers is kept.
+  /// Tracks `seeds` from `previous` into `current` and estimates the prior from them, then
+  /// `extra_px` (e.g. the feature candidates, returned through `extra_tracked` / `extra_ok`) with
+  /// their own window. `T_guess` is the constant-velocity guess of the current pose, `T_previous`
+  /// the previous frame's pose; `scene_depth` scales the floors. When the pose from the flow is
+  /// weak (inliers fewer than half the seeds' tracks) and the image's shift is far from the flow's
+  /// start (flow.shift_retry_px), the seeds are tracked again from the shift and the set of tracks
+  /// whose pose has more inliers is kept; the extra points then start from the same place.
   MotionPrior estimate(const features::ImagePyramid& previous,
                        const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
                        const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
@@ -110,13 +110,6 @@ class MotionPriorEstimator {
                             const features::ImagePyramid& current,
                             const std::vector<cv::Point2f>& from,
                             const std::vector<cv::Point2f>& start);
-
-  /// Tracks `from` (the seeds first, then the candidates) each with its own flow.
-  void trackSeedsAndCandidates(const features::ImagePyramid& previous,
-                               const features::ImagePyramid& current,
-                               const std::vector<cv::Point2f>& from,
-                               const std::vector<cv::Point2f>* start, std::size_t num_seeds,
-                               std::vector<cv::Point2f>* to, std::vector<unsigned char>* ok);
 
   MotionPriorParams params_;
   features::MotionOnlyBundleAdjustmentParams motion_ba_;
