@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """Checks of loop closure runs against the rendered ground truth, shared by the tool tests.
 
-  loop_checks.py loops SUMMARY GROUNDTRUTH [--max-distance M]
+  loop_checks.py loops SUMMARY GROUNDTRUTH [--max-distance M] [--keyframes K]
       every loop in run_sequence's summary.json is a true loop: it joins two keyframes whose true
       camera centres are within M metres (default 3) and whose optical axes are within 30
       degrees, and the relative pose it measured (S_current_loop) is the true one: its rotation
       within 3 degrees, and where the centres are over 1 m apart the direction from one to the
-      other within 20 degrees (a loop onto a look-alike place gets that geometry wrong).
+      other within 20 degrees and the distance within 25 % (the measured one in metres by the
+      map's local scale over the K keyframes up to the current one, as in `scale`): a loop onto
+      a look-alike place gets that geometry wrong.
   loop_checks.py scale SUMMARY GROUNDTRUTH [--keyframes K] [--tolerance F]
       the relative scale measured at each loop is within F (default 0.05) of the drift the map
       really had just before that loop's correction (run_sequence writes those keyframes beside
@@ -74,6 +76,16 @@ def local_scale(estimate, truth):
     return np.sqrt(((est - est.mean(0)) ** 2).sum() / ((gt - gt.mean(0)) ** 2).sum())
 
 
+def keyframes_around(loop, folder, count):
+    """The map just before the loop's correction (keyframes_before_loop_N.txt): its `count`
+    keyframes up to the current keyframe and its `count` keyframes from the loop keyframe on."""
+    before = load_tum(os.path.join(folder, loop["keyframes_before"]))
+    before = before[np.argsort(before[:, 0])]
+    up_to_current = before[before[:, 0] <= loop["current_stamp"] + 1e-6][-count:]
+    from_loop = before[before[:, 0] >= loop["loop_stamp"] - 1e-6][:count]
+    return up_to_current, from_loop
+
+
 def option(name, default):
     return float(sys.argv[sys.argv.index(name) + 1]) if name in sys.argv else default
 
@@ -81,6 +93,8 @@ def option(name, default):
 def main():
     mode, summary, truth = sys.argv[1], json.load(open(sys.argv[2])), load_tum(sys.argv[3])
     loops = summary["loops"]
+    folder = os.path.dirname(os.path.abspath(sys.argv[2]))
+    count = int(option("--keyframes", 8))
     if mode == "loops":
         limit = option("--max-distance", 3.0)
         for loop in loops:
@@ -88,22 +102,22 @@ def main():
             distance = np.linalg.norm(a[1:4] - b[1:4])
             angle = np.degrees(np.arccos(np.clip(optical_axis(a) @ optical_axis(b), -1, 1)))
             rotation_error, direction_error = relative_pose_errors(loop, a, b)
+            # The measured centre-to-centre distance is in the current map's units.
+            units_per_metre = local_scale(keyframes_around(loop, folder, count)[0], truth)
+            measured = np.linalg.norm(loop["S_current_loop"][4:7]) / units_per_metre
             print("loop %d -> %d: true distance %.2f m, view angle %.1f deg; measured relative "
-                  "pose: rotation error %.2f deg, direction error %.1f deg"
+                  "pose: rotation error %.2f deg, direction error %.1f deg, distance %.2f m"
                   % (loop["current_keyframe"], loop["loop_keyframe"], distance, angle,
-                     rotation_error, direction_error))
+                     rotation_error, direction_error, measured))
             if distance > limit or angle > 30:
                 raise SystemExit("FAIL: a false loop was accepted (too far apart)")
-            if rotation_error > 3 or (distance > 1 and direction_error > 20):
+            if rotation_error > 3 or (distance > 1 and (direction_error > 20 or
+                                                         abs(measured / distance - 1) > 0.25)):
                 raise SystemExit("FAIL: the loop's relative pose is not the true one")
     elif mode == "scale":
-        count, tolerance = int(option("--keyframes", 8)), option("--tolerance", 0.05)
-        folder = os.path.dirname(os.path.abspath(sys.argv[2]))
+        tolerance = option("--tolerance", 0.05)
         for loop in loops:
-            before = load_tum(os.path.join(folder, loop["keyframes_before"]))
-            before = before[np.argsort(before[:, 0])]
-            up_to_current = before[before[:, 0] <= loop["current_stamp"] + 1e-6][-count:]
-            from_loop = before[before[:, 0] >= loop["loop_stamp"] - 1e-6][:count]
+            up_to_current, from_loop = keyframes_around(loop, folder, count)
             drift = local_scale(up_to_current, truth) / local_scale(from_loop, truth)
             print("loop %d -> %d: measured scale %.4f, true drift %.4f (error %.2f %%)"
                   % (loop["current_keyframe"], loop["loop_keyframe"], loop["scale"], drift,
