@@ -38,24 +38,20 @@ cv::Point2f moved(const Eigen::Vector3d& p_cur, const cv::Point2f& px,
   return cv::Point2f(static_cast<float>(pixel->x()), static_cast<float>(pixel->y()));
 }
 
-/// Where the flow starts (MotionPriorParams::predict_flow): the map points through their
-/// position in the guessed camera, the other points (candidates, depth unknown here) at the
-/// scene depth in the previous camera, moved by the guessed motion.
-std::vector<cv::Point2f> predictedPixels(const std::vector<FlowSeed>& seeds,
-                                         const std::vector<cv::Point2f>& extra_px,
-                                         const geometry::SE3& T_guess,
-                                         const geometry::SE3& T_previous, double scene_depth,
-                                         const geometry::CameraModel& camera) {
-  std::vector<cv::Point2f> start;
-  start.reserve(seeds.size() + extra_px.size());
-  for (const FlowSeed& seed : seeds)
-    start.push_back(moved(T_guess * seed.p_world, seed.px, camera));
-  const geometry::SE3 T_cur_previous = T_guess * T_previous.inverse();
+/// The points at the scene depth in the previous camera (their own depth is unknown here), moved
+/// into the camera `T_cur_world`: where their flow starts.
+std::vector<cv::Point2f> movedAtSceneDepth(const std::vector<cv::Point2f>& px,
+                                           const geometry::SE3& T_cur_world,
+                                           const geometry::SE3& T_previous, double scene_depth,
+                                           const geometry::CameraModel& camera) {
+  const geometry::SE3 T_cur_previous = T_cur_world * T_previous.inverse();
   const double depth = scene_depth > 0.0 ? scene_depth : 1.0;
-  for (const cv::Point2f& px : extra_px) {
-    const Eigen::Vector3d ray = camera.unproject(Eigen::Vector2d(px.x, px.y));
-    start.push_back(ray.z() > 0.0 ? moved(T_cur_previous * (ray * (depth / ray.z())), px, camera)
-                                  : px);
+  std::vector<cv::Point2f> start;
+  start.reserve(px.size());
+  for (const cv::Point2f& p : px) {
+    const Eigen::Vector3d ray = camera.unproject(Eigen::Vector2d(p.x, p.y));
+    start.push_back(ray.z() > 0.0 ? moved(T_cur_previous * (ray * (depth / ray.z())), p, camera)
+                                  : p);
   }
   return start;
 }
@@ -64,11 +60,6 @@ OpticalFlowParams candidateFlowParams(const MotionPriorParams& params) {
   OpticalFlowParams flow = params.flow;
   if (params.candidate_flow_window > 0) flow.window = params.candidate_flow_window;
   return flow;
-}
-
-std::vector<cv::Point2f> slice(const std::vector<cv::Point2f>& points, std::size_t begin,
-                               std::size_t end) {
-  return std::vector<cv::Point2f>(points.begin() + begin, points.begin() + end);
 }
 
 Eigen::Matrix<double, 6, 6> diagonalSigma(double rotation, double translation) {
@@ -108,37 +99,30 @@ MotionPrior MotionPriorEstimator::estimate(
   const std::size_t n = std::min<std::size_t>(seeds.size(), params_.max_tracks);
   for (std::size_t k = 0; k < n; ++k)
     picked.push_back(seeds[k * seeds.size() / n]);
-  std::vector<cv::Point2f> from;
-  from.reserve(picked.size() + extra_px.size());
-  for (const FlowSeed& seed : picked)
-    from.push_back(seed.px);
-  from.insert(from.end(), extra_px.begin(), extra_px.end());
-  // The seeds first: the prior rests on them alone. The candidates follow once, from where the
-  // chosen seeds' tracks started (the constant-velocity prediction, or the image's shift).
-  const std::size_t num_seeds = picked.size();
-  const std::vector<cv::Point2f> start =
-      params_.predict_flow
-          ? predictedPixels(picked, extra_px, T_guess, T_previous, scene_depth, camera)
-          : from;
-  const std::vector<cv::Point2f> seed_from = slice(from, 0, num_seeds);
-  const std::vector<cv::Point2f> seed_start = slice(start, 0, num_seeds);
+  std::vector<cv::Point2f> seed_from, seed_start;
+  for (const FlowSeed& seed : picked) {
+    seed_from.push_back(seed.px);
+    seed_start.push_back(params_.predict_flow ? moved(T_guess * seed.p_world, seed.px, camera)
+                                              : seed.px);
+  }
+  // The seeds first: the prior rests on them alone.
   std::vector<cv::Point2f> to;
   std::vector<unsigned char> ok;
   flow_.track(previous, current, seed_from, &to, &ok, params_.predict_flow ? &seed_start : nullptr);
   MotionPrior prior = priorFromTracks(picked, to, ok, T_guess, scene_depth, camera);
   // A weak prior (fewer inliers than half the seeds' tracks, or none) and the image's shift far
   // from where the flow started: the motion was not the expected one (a jerk, a low frame rate).
-  // The seeds again from the shift; the pose with more inliers wins, and the candidates start
-  // from the shift when it does.
+  // The seeds again from the shift; the pose with more inliers wins.
   const long seed_tracks = std::count(ok.begin(), ok.end(), 1);
   const bool weak = !prior.from_flow || 2 * prior.num_tracks < seed_tracks;
-  const cv::Point2d shift = weak ? shiftAwayFrom(previous, current, from, start) : cv::Point2d();
+  const cv::Point2d shift =
+      weak ? shiftAwayFrom(previous, current, seed_from, seed_start) : cv::Point2d();
   bool from_shift_won = false;
-  const cv::Point2f by(static_cast<float>(shift.x), static_cast<float>(shift.y));
   if (shift != cv::Point2d(0.0, 0.0)) {
-    std::vector<cv::Point2f> shifted(num_seeds);
-    for (std::size_t i = 0; i < num_seeds; ++i)
-      shifted[i] = seed_from[i] + by;
+    const cv::Point2f by(static_cast<float>(shift.x), static_cast<float>(shift.y));
+    std::vector<cv::Point2f> shifted;
+    for (const cv::Point2f& px : seed_from)
+      shifted.push_back(px + by);
     std::vector<cv::Point2f> shifted_to;
     std::vector<unsigned char> shifted_ok;
     flow_.track(previous, current, seed_from, &shifted_to, &shifted_ok, &shifted);
@@ -147,13 +131,18 @@ MotionPrior MotionPriorEstimator::estimate(
     from_shift_won = from_shift.num_tracks > prior.num_tracks;
     if (from_shift_won) prior = from_shift;
   }
-  std::vector<cv::Point2f> candidate_start = slice(start, num_seeds, from.size());
-  if (from_shift_won) {
-    for (std::size_t i = 0; i < extra_px.size(); ++i)
-      candidate_start[i] = extra_px[i] + by;
+  // Then the candidates, once, from where the prior's pose moves them at the scene depth. The
+  // pose the seeds measured is closer than the constant-velocity guess whenever the motion
+  // changed (a turn that slows, a low frame rate), and from a start out of reach Lucas-Kanade
+  // can converge onto the wrong texture: the backward check drops such a track, and it is not
+  // tried again from the point as a failed one is.
+  std::vector<cv::Point2f> candidate_start;
+  if (params_.predict_flow || from_shift_won) {
+    candidate_start = movedAtSceneDepth(extra_px, prior.from_flow ? prior.T_cur_world : T_guess,
+                                        T_previous, scene_depth, camera);
   }
   candidate_flow_.track(previous, current, extra_px, extra_tracked, extra_ok,
-                        params_.predict_flow || from_shift_won ? &candidate_start : nullptr);
+                        candidate_start.empty() ? nullptr : &candidate_start);
   if (params_.candidate_max_forward_backward_px > 0.0 &&
       !(params_.flow.method == FlowMethod::kLucasKanade &&
         params_.flow.max_forward_backward_px > 0.0)) {

@@ -29,9 +29,10 @@ struct MotionPriorParams {
   double min_translation_sigma = 0.005;     ///< Floor of Sigma_Delta (fraction of the scene depth).
   double fallback_rotation_sigma = 0.05;    ///< Sigma_Delta of the fallback (radians).
   double fallback_translation_sigma = 0.1;  ///< ...(fraction of the scene depth).
-  /// Start the flow of each point where the constant-velocity motion moves it (map points through
-  /// their position, candidates at the scene depth), not where it was: a fast but steady turn
-  /// moves the image by more than Lucas-Kanade's pyramid reaches from zero.
+  /// Start the flow of each map point where the constant-velocity motion moves it, and of each
+  /// candidate where the pose measured from the map points' flow moves it at the scene depth,
+  /// not where it was: a fast but steady turn moves the image by more than Lucas-Kanade's pyramid
+  /// reaches from zero.
   bool predict_flow = true;
   /// Drop the candidates' (new features') tracks whose backward flow misses the start by more
   /// than this (pixels; <= 0: no check unless flow.max_forward_backward_px checks all tracks).
@@ -71,7 +72,8 @@ class MotionPriorEstimator {
   /// the previous frame's pose; `scene_depth` scales the floors. When the pose from the flow is
   /// weak (inliers fewer than half the seeds' tracks) and the image's shift is far from the flow's
   /// start (flow.shift_retry_px), the seeds are tracked again from the shift and the set of tracks
-  /// whose pose has more inliers is kept; the extra points then start from the same place.
+  /// whose pose has more inliers is kept. The extra points start where the prior's pose moves
+  /// them at `scene_depth` (the guess's pose when the flow gave none).
   MotionPrior estimate(const features::ImagePyramid& previous,
                        const features::ImagePyramid& current, const std::vector<FlowSeed>& seeds,
                        const std::vector<cv::Point2f>& extra_px, const geometry::SE3& T_guess,
