@@ -9,6 +9,8 @@
 #include <ceres/ceres.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 
 #include "scale_drift_slam/common/stopwatch.h"
 
@@ -220,6 +222,59 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   }
   stats.time_ms = timer.ms();
   return result;
+}
+
+std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double threshold_px,
+                                        int iterations, PnpSampleSolver solver,
+                                        std::vector<int>* inliers) {
+  inliers->clear();
+  if (input.observations.size() < 4 || !(input.focal_length_px > 0.0)) return std::nullopt;
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> normalised;
+  for (const PoseObservation& o : input.observations) {
+    object.emplace_back(o.p_world.x(), o.p_world.y(), o.p_world.z());
+    normalised.emplace_back(o.xy.x(), o.xy.y());
+  }
+  cv::Mat rvec, tvec;
+  try {
+    if (!cv::solvePnPRansac(
+            object, normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false,
+            iterations, threshold_px / input.focal_length_px, 0.99, *inliers,
+            solver == PnpSampleSolver::kP3P ? cv::SOLVEPNP_AP3P : cv::SOLVEPNP_EPNP) ||
+        inliers->size() < 4) {
+      inliers->clear();
+      return std::nullopt;
+    }
+  } catch (const cv::Exception&) {  // degenerate points (all on one line, or coincident)
+    inliers->clear();
+    return std::nullopt;
+  }
+  cv::Mat R_cv;
+  cv::Rodrigues(rvec, R_cv);
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  cv::cv2eigen(R_cv, R);
+  cv::cv2eigen(tvec, t);
+  if (!R.allFinite() || !t.allFinite()) return std::nullopt;
+  return geometry::SE3(R, t);
+}
+
+std::optional<MotionOnlyResult> solvePoseWithoutGuess(
+    const MotionOnlyInput& input, const MotionOnlyBundleAdjustmentParams& params, int iterations,
+    PnpSampleSolver solver, std::vector<int>* kept) {
+  const std::optional<geometry::SE3> T =
+      ransacPose(input, params.inlier_threshold_px, iterations, solver, kept);
+  if (!T) return std::nullopt;
+  MotionOnlyInput on_inliers;
+  on_inliers.T_cam_world_guess = *T;
+  on_inliers.focal_length_px = input.focal_length_px;
+  for (const int k : *kept)
+    on_inliers.observations.push_back(input.observations[k]);
+  try {
+    return solveMotionOnlyBundleAdjustment(on_inliers, params);
+  } catch (const std::invalid_argument&) {  // RANSAC's pose puts its own inliers behind it
+    return std::nullopt;
+  }
 }
 
 }  // namespace scale_drift_slam::features

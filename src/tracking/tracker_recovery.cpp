@@ -3,8 +3,6 @@
 
 #include <cmath>
 
-#include <opencv2/calib3d.hpp>
-
 #include "scale_drift_slam/tracking/keyframe_triangulation.h"
 #include "scale_drift_slam/tracking/tracker.h"
 
@@ -68,42 +66,20 @@ std::optional<geometry::SE3> Tracker::poseFromDescribedPoints(const DescribedPoi
                        params_.recovery_max_descriptor_distance, params_.recovery_max_ratio);
   features::MotionOnlyInput input;
   input.focal_length_px = focal_;
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> normalised;
   for (std::size_t i = 0; i < match.size(); ++i) {
     if (match[i] < 0 || !map_.hasPoint(points.ids[i])) continue;
-    const Eigen::Vector3d& p = map_.point(points.ids[i]).p_world;
     const cv::Point2f& px = frame.keypoints[match[i]].pt;
-    const Eigen::Vector2d xy = frame_camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y));
-    object.emplace_back(p.x(), p.y(), p.z());
-    normalised.emplace_back(xy.x(), xy.y());
-    input.observations.push_back({p, xy});
+    input.observations.push_back(
+        {map_.point(points.ids[i]).p_world,
+         frame_camera_->undistortToNormalized(Eigen::Vector2d(px.x, px.y))});
   }
-  cv::Mat rvec, tvec;
-  std::vector<int> pnp_inliers;
-  if (static_cast<int>(object.size()) < min_matches) return std::nullopt;
-  if (!cv::solvePnPRansac(object, normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec,
-                          false, 200, params_.motion_ba.inlier_threshold_px / focal_, 0.99,
-                          pnp_inliers, cv::SOLVEPNP_EPNP) ||
-      static_cast<int>(pnp_inliers.size()) < min_matches) {
-    return std::nullopt;
-  }
-  cv::Mat R;
-  cv::Rodrigues(rvec, R);
-  Eigen::Matrix3d R_eigen;
-  Eigen::Vector3d t_eigen;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c)
-      R_eigen(r, c) = R.at<double>(r, c);
-    t_eigen(r) = tvec.at<double>(r);
-  }
-  // Refined on the PnP inliers with the tracker's own robust motion-only BA.
-  std::vector<features::PoseObservation> kept;
-  for (const int k : pnp_inliers)
-    kept.push_back(input.observations[k]);
-  input.observations = std::move(kept);
-  input.T_cam_world_guess = geometry::SE3(R_eigen, t_eigen);
-  return features::solveMotionOnlyBundleAdjustment(input, params_.motion_ba).T_cam_world;
+  if (static_cast<int>(input.observations.size()) < min_matches) return std::nullopt;
+  // EPnP in RANSAC, refined on its inliers with the tracker's own robust motion-only BA.
+  std::vector<int> kept;
+  const std::optional<features::MotionOnlyResult> solved = features::solvePoseWithoutGuess(
+      input, params_.motion_ba, 200, features::PnpSampleSolver::kEPnP, &kept);
+  if (!solved || static_cast<int>(kept.size()) < min_matches) return std::nullopt;
+  return solved->T_cam_world;
 }
 
 void Tracker::recoverFromKeyframe(const features::ImagePyramid& image,

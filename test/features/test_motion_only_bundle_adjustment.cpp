@@ -1,4 +1,5 @@
-// Motion-only BA against a known pose: noisy observations with gross outliers, both solvers.
+// Motion-only BA against a known pose: noisy observations with gross outliers, both solvers;
+// the pose from the observations alone (ransacPose), without a guess.
 
 #include <random>
 
@@ -83,6 +84,47 @@ TEST(MotionOnlyBundleAdjustment, RejectsBadInput) {
   MotionOnlyBundleAdjustmentParams params;
   params.max_iterations = 0;
   EXPECT_THROW(params.validate(), std::invalid_argument);
+}
+
+TEST(RansacPose, FindsAKnownPoseWithoutAGuessDespiteHalfTheObservationsWrong) {
+  const geometry::SE3 T_true = truePose();
+  const MotionOnlyInput input = makeInput(T_true, 120, 0.5, 0.5, 7);
+  // The inliers are the observations within 3 px of the true pose: the clean half and the few
+  // outliers displaced by less than that.
+  int true_inliers = 0;
+  for (const PoseObservation& o : input.observations) {
+    const Eigen::Vector3d p = T_true * o.p_world;
+    true_inliers += (p.head<2>() / p.z() - o.xy).norm() * kFocal < 3.0;
+  }
+  for (const PnpSampleSolver solver : {PnpSampleSolver::kP3P, PnpSampleSolver::kEPnP}) {
+    std::vector<int> inliers;
+    const std::optional<geometry::SE3> T = ransacPose(input, 3.0, 100, solver, &inliers);
+    ASSERT_TRUE(T.has_value());
+    const geometry::SE3::Tangent error = (*T * T_true.inverse()).log();
+    EXPECT_LT(error.head<3>().norm(), 5e-3);
+    EXPECT_LT(error.tail<3>().norm(), 3e-2);
+    EXPECT_NEAR(static_cast<double>(inliers.size()), true_inliers, 0.05 * true_inliers);
+    // Refined on its inliers by the motion-only BA: closer still.
+    std::vector<int> kept;
+    const std::optional<MotionOnlyResult> refined =
+        solvePoseWithoutGuess(input, MotionOnlyBundleAdjustmentParams(), 100, solver, &kept);
+    ASSERT_TRUE(refined.has_value());
+    const geometry::SE3::Tangent refined_error = (refined->T_cam_world * T_true.inverse()).log();
+    EXPECT_LT(refined_error.head<3>().norm(), 2e-3);
+    EXPECT_LT(refined_error.tail<3>().norm(), 1e-2);
+  }
+}
+
+TEST(RansacPose, GivesNothingForTooFewOrDegenerateObservations) {
+  std::vector<int> inliers;
+  MotionOnlyInput input = makeInput(truePose(), 3, 0.5, 0.0, 1);
+  EXPECT_FALSE(ransacPose(input, 3.0, 100, PnpSampleSolver::kP3P, &inliers).has_value());
+  EXPECT_TRUE(inliers.empty());
+  input = makeInput(truePose(), 20, 0.5, 0.0, 1);
+  for (PoseObservation& o : input.observations) {  // every point the same
+    o = input.observations.front();
+  }
+  EXPECT_FALSE(ransacPose(input, 3.0, 100, PnpSampleSolver::kP3P, &inliers).has_value());
 }
 
 }  // namespace

@@ -73,4 +73,23 @@ std::optional<Eigen::Matrix<double, 6, 6>> poseCovariance(
 MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
                                                  const MotionOnlyBundleAdjustmentParams& params);
 
+/// The minimal solver ransacPose runs on each sample: P3P on 3 observations checked on a 4th
+/// (OpenCV's AP3P), or EPnP on 5 (about twice the instructions per sample).
+enum class PnpSampleSolver { kP3P, kEPnP };
+
+/// The pose from the observations alone, without a guess: `solver` inside RANSAC (OpenCV's
+/// solvePnPRansac on the normalised coordinates), `iterations` samples, inliers within
+/// `threshold_px` at input.focal_length_px. Their indices go to `inliers`. Nothing when RANSAC
+/// finds no pose (fewer than 4 observations among them).
+std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double threshold_px,
+                                        int iterations, PnpSampleSolver solver,
+                                        std::vector<int>* inliers);
+
+/// ransacPose within params.inlier_threshold_px, then the motion-only BA from its pose on its
+/// inliers, whose indices go to `kept` (the result's `inlier` flags are over those). Nothing
+/// when RANSAC finds no pose or the BA refuses its inliers.
+std::optional<MotionOnlyResult> solvePoseWithoutGuess(
+    const MotionOnlyInput& input, const MotionOnlyBundleAdjustmentParams& params, int iterations,
+    PnpSampleSolver solver, std::vector<int>* kept);
+
 }  // namespace scale_drift_slam::features
