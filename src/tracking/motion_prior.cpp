@@ -29,6 +29,10 @@ void MotionPriorParams::validate() const {
 
 namespace {
 
+int countInliers(const features::MotionOnlyResult& result) {
+  return static_cast<int>(std::count(result.inlier.begin(), result.inlier.end(), true));
+}
+
 /// Where the constant-velocity motion moves a point: its pixel in the current camera, or the
 /// pixel itself when that is not in the image.
 cv::Point2f moved(const Eigen::Vector3d& p_cur, const cv::Point2f& px,
@@ -191,14 +195,24 @@ MotionPrior MotionPriorEstimator::priorFromTracks(const std::vector<FlowSeed>& p
     return fallback(T_guess, scene_depth);
   }
   features::MotionOnlyResult result;
+  int inliers = 0;
   try {
     result = features::solveMotionOnlyBundleAdjustment(input, motion_ba_);
-  } catch (const std::invalid_argument&) {
-    return fallback(T_guess, scene_depth);
+    inliers = countInliers(result);
+  } catch (const std::invalid_argument&) {  // the guess puts the points behind the camera
   }
-  int inliers = 0;
-  for (const bool inlier : result.inlier)
-    inliers += inlier;
+  // Two thirds of the tracks refused: the BA may have started too far from the pose to reach it
+  // (a turn that slowed between frames a second apart: the guess 7 degrees off, the tracks found
+  // from the points themselves). The pose from the tracks alone, refined on its inliers.
+  if (3 * inliers < static_cast<int>(input.observations.size())) {
+    std::vector<int> kept;
+    std::optional<features::MotionOnlyResult> from_tracks = features::solvePoseWithoutGuess(
+        input, motion_ba_, 50, features::PnpSampleSolver::kP3P, &kept);
+    if (from_tracks && countInliers(*from_tracks) > inliers) {
+      result = std::move(*from_tracks);
+      inliers = countInliers(result);
+    }
+  }
   if (inliers < params_.min_tracks) return fallback(T_guess, scene_depth);
   MotionPrior prior;
   prior.T_cur_world = result.T_cam_world;
