@@ -224,8 +224,7 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
   return result;
 }
 
-std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double threshold_px,
-                                        int iterations, PnpSampleSolver solver,
+std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, const PnpRansacParams& ransac,
                                         std::vector<int>* inliers) {
   inliers->clear();
   if (input.observations.size() < 4 || !(input.focal_length_px > 0.0)) return std::nullopt;
@@ -239,8 +238,9 @@ std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double thr
   try {
     if (!cv::solvePnPRansac(
             object, normalised, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false,
-            iterations, threshold_px / input.focal_length_px, 0.99, *inliers,
-            solver == PnpSampleSolver::kP3P ? cv::SOLVEPNP_AP3P : cv::SOLVEPNP_EPNP) ||
+            ransac.iterations, ransac.threshold_px / input.focal_length_px, ransac.confidence,
+            *inliers,
+            ransac.solver == PnpSampleSolver::kP3P ? cv::SOLVEPNP_AP3P : cv::SOLVEPNP_EPNP) ||
         inliers->size() < 4) {
       inliers->clear();
       return std::nullopt;
@@ -260,10 +260,9 @@ std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double thr
 }
 
 std::optional<MotionOnlyResult> solvePoseWithoutGuess(
-    const MotionOnlyInput& input, const MotionOnlyBundleAdjustmentParams& params, int iterations,
-    PnpSampleSolver solver, std::vector<int>* kept) {
-  const std::optional<geometry::SE3> T =
-      ransacPose(input, params.inlier_threshold_px, iterations, solver, kept);
+    const MotionOnlyInput& input, const PnpRansacParams& ransac,
+    const MotionOnlyBundleAdjustmentParams& params, std::vector<int>* kept) {
+  const std::optional<geometry::SE3> T = ransacPose(input, ransac, kept);
   if (!T) return std::nullopt;
   MotionOnlyInput on_inliers;
   on_inliers.T_cam_world_guess = *T;

@@ -4,9 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
-
 #include "scale_drift_slam/common/statistics.h"
 
 namespace scale_drift_slam::loop {
@@ -46,33 +43,6 @@ void validateInput(const LoopConstraintInput& input) {
   }
 }
 
-/// P3P (AP3P) + RANSAC on normalised coordinates (camera matrix = identity, threshold in
-/// normalised units). Returns false when RANSAC finds no model.
-bool ransacPose(const LoopConstraintInput& input, const LoopConstraintParams& params,
-                geometry::SE3* T_current_loop) {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> image;
-  for (const Match2D3D& m : input.matches) {
-    object.emplace_back(m.p_loop.x(), m.p_loop.y(), m.p_loop.z());
-    image.emplace_back(m.xy_current.x(), m.xy_current.y());
-  }
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  const bool found = cv::solvePnPRansac(object, image, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec,
-                                        tvec, false, params.ransac_iterations,
-                                        params.ransac_threshold_px / input.focal_length_px,
-                                        params.ransac_confidence, inliers, cv::SOLVEPNP_AP3P);
-  if (!found || inliers.size() < 4) return false;
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  cv::cv2eigen(R_cv, R);
-  cv::cv2eigen(tvec, t);
-  *T_current_loop = geometry::SE3(R, t);
-  return true;
-}
-
 }  // namespace
 
 LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
@@ -89,18 +59,23 @@ LoopConstraintResult estimateLoopPose(const LoopConstraintInput& input,
     result.reason = "only " + std::to_string(c.num_matches) + " 2D-3D matches";
     return result;
   }
-  geometry::SE3 T_ransac;
-  if (!ransacPose(input, params, &T_ransac)) {
-    result.reason = "P3P RANSAC found no pose";
-    return result;
-  }
-
-  // Robust refinement on all matches, the loop keyframe's frame playing the world.
+  // P3P in RANSAC, then a robust refinement on all matches, the loop keyframe's frame playing
+  // the world.
   features::MotionOnlyInput refine;
-  refine.T_cam_world_guess = T_ransac;
   refine.focal_length_px = input.focal_length_px;
   for (const Match2D3D& m : input.matches)
     refine.observations.push_back({m.p_loop, m.xy_current});
+  std::vector<int> ransac_inliers;
+  const std::optional<geometry::SE3> T_ransac =
+      features::ransacPose(refine,
+                           {params.ransac_threshold_px, params.ransac_iterations,
+                            params.ransac_confidence, features::PnpSampleSolver::kP3P},
+                           &ransac_inliers);
+  if (!T_ransac) {
+    result.reason = "P3P RANSAC found no pose";
+    return result;
+  }
+  refine.T_cam_world_guess = *T_ransac;
   features::MotionOnlyBundleAdjustmentParams refine_params = params.refinement;
   refine_params.inlier_threshold_px = params.ransac_threshold_px;
   const features::MotionOnlyResult refined =

@@ -207,7 +207,8 @@ MotionPrior MotionPriorEstimator::priorFromTracks(const std::vector<FlowSeed>& p
   if (3 * inliers < static_cast<int>(input.observations.size())) {
     std::vector<int> kept;
     std::optional<features::MotionOnlyResult> from_tracks = features::solvePoseWithoutGuess(
-        input, motion_ba_, 50, features::PnpSampleSolver::kP3P, &kept);
+        input, {motion_ba_.inlier_threshold_px, 50, 0.99, features::PnpSampleSolver::kP3P},
+        motion_ba_, &kept);
     if (from_tracks && countInliers(*from_tracks) > inliers) {
       result = std::move(*from_tracks);
       inliers = countInliers(result);

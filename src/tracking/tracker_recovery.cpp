@@ -77,7 +77,8 @@ std::optional<geometry::SE3> Tracker::poseFromDescribedPoints(const DescribedPoi
   // EPnP in RANSAC, refined on its inliers with the tracker's own robust motion-only BA.
   std::vector<int> kept;
   const std::optional<features::MotionOnlyResult> solved = features::solvePoseWithoutGuess(
-      input, params_.motion_ba, 200, features::PnpSampleSolver::kEPnP, &kept);
+      input, {params_.motion_ba.inlier_threshold_px, 200, 0.99, features::PnpSampleSolver::kEPnP},
+      params_.motion_ba, &kept);
   if (!solved || static_cast<int>(kept.size()) < min_matches) return std::nullopt;
   return solved->T_cam_world;
 }

@@ -98,7 +98,7 @@ TEST(RansacPose, FindsAKnownPoseWithoutAGuessDespiteHalfTheObservationsWrong) {
   }
   for (const PnpSampleSolver solver : {PnpSampleSolver::kP3P, PnpSampleSolver::kEPnP}) {
     std::vector<int> inliers;
-    const std::optional<geometry::SE3> T = ransacPose(input, 3.0, 100, solver, &inliers);
+    const std::optional<geometry::SE3> T = ransacPose(input, {3.0, 100, 0.99, solver}, &inliers);
     ASSERT_TRUE(T.has_value());
     const geometry::SE3::Tangent error = (*T * T_true.inverse()).log();
     EXPECT_LT(error.head<3>().norm(), 5e-3);
@@ -106,8 +106,8 @@ TEST(RansacPose, FindsAKnownPoseWithoutAGuessDespiteHalfTheObservationsWrong) {
     EXPECT_NEAR(static_cast<double>(inliers.size()), true_inliers, 0.05 * true_inliers);
     // Refined on its inliers by the motion-only BA: closer still.
     std::vector<int> kept;
-    const std::optional<MotionOnlyResult> refined =
-        solvePoseWithoutGuess(input, MotionOnlyBundleAdjustmentParams(), 100, solver, &kept);
+    const std::optional<MotionOnlyResult> refined = solvePoseWithoutGuess(
+        input, {3.0, 100, 0.99, solver}, MotionOnlyBundleAdjustmentParams(), &kept);
     ASSERT_TRUE(refined.has_value());
     const geometry::SE3::Tangent refined_error = (refined->T_cam_world * T_true.inverse()).log();
     EXPECT_LT(refined_error.head<3>().norm(), 2e-3);
@@ -118,13 +118,13 @@ TEST(RansacPose, FindsAKnownPoseWithoutAGuessDespiteHalfTheObservationsWrong) {
 TEST(RansacPose, GivesNothingForTooFewOrDegenerateObservations) {
   std::vector<int> inliers;
   MotionOnlyInput input = makeInput(truePose(), 3, 0.5, 0.0, 1);
-  EXPECT_FALSE(ransacPose(input, 3.0, 100, PnpSampleSolver::kP3P, &inliers).has_value());
+  EXPECT_FALSE(ransacPose(input, PnpRansacParams(), &inliers).has_value());
   EXPECT_TRUE(inliers.empty());
   input = makeInput(truePose(), 20, 0.5, 0.0, 1);
   for (PoseObservation& o : input.observations) {  // every point the same
     o = input.observations.front();
   }
-  EXPECT_FALSE(ransacPose(input, 3.0, 100, PnpSampleSolver::kP3P, &inliers).has_value());
+  EXPECT_FALSE(ransacPose(input, PnpRansacParams(), &inliers).has_value());
 }
 
 }  // namespace

@@ -77,19 +77,25 @@ MotionOnlyResult solveMotionOnlyBundleAdjustment(const MotionOnlyInput& input,
 /// (OpenCV's AP3P), or EPnP on 5 (about twice the instructions per sample).
 enum class PnpSampleSolver { kP3P, kEPnP };
 
-/// The pose from the observations alone, without a guess: `solver` inside RANSAC (OpenCV's
-/// solvePnPRansac on the normalised coordinates), `iterations` samples, inliers within
-/// `threshold_px` at input.focal_length_px. Their indices go to `inliers`. Nothing when RANSAC
-/// finds no pose (fewer than 4 observations among them).
-std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, double threshold_px,
-                                        int iterations, PnpSampleSolver solver,
+/// How ransacPose searches: OpenCV's solvePnPRansac on the normalised coordinates.
+struct PnpRansacParams {
+  double threshold_px = 3.0;  ///< Inliers reproject within this (at the input's focal length).
+  int iterations = 100;       ///< Samples at most.
+  double confidence = 0.99;   ///< Stop once a better sample is this unlikely.
+  PnpSampleSolver solver = PnpSampleSolver::kP3P;
+};
+
+/// The pose from the observations alone, without a guess: RANSAC over minimal samples. The
+/// indices of its inliers go to `inliers`. Nothing when RANSAC finds no pose (fewer than 4
+/// observations among them).
+std::optional<geometry::SE3> ransacPose(const MotionOnlyInput& input, const PnpRansacParams& ransac,
                                         std::vector<int>* inliers);
 
-/// ransacPose within params.inlier_threshold_px, then the motion-only BA from its pose on its
-/// inliers, whose indices go to `kept` (the result's `inlier` flags are over those). Nothing
-/// when RANSAC finds no pose or the BA refuses its inliers.
+/// ransacPose, then the motion-only BA from its pose on its inliers, whose indices go to `kept`
+/// (the result's `inlier` flags are over those). Nothing when RANSAC finds no pose or the BA
+/// refuses its inliers.
 std::optional<MotionOnlyResult> solvePoseWithoutGuess(
-    const MotionOnlyInput& input, const MotionOnlyBundleAdjustmentParams& params, int iterations,
-    PnpSampleSolver solver, std::vector<int>* kept);
+    const MotionOnlyInput& input, const PnpRansacParams& ransac,
+    const MotionOnlyBundleAdjustmentParams& params, std::vector<int>* kept);
 
 }  // namespace scale_drift_slam::features
