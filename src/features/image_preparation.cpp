@@ -175,6 +175,19 @@ std::vector<cv::Mat> ImagePyramid::lucasKanadePyramid(int num_levels) const {
   return pyramid;
 }
 
+std::vector<cv::Mat> ImagePyramid::baseLevelForLucasKanade(int window) const {
+  cv::Size whole;
+  cv::Point offset;
+  base().locateROI(whole, offset);
+  if (offset.x < window || offset.y < window || offset.x + base().cols + window > whole.width ||
+      offset.y + base().rows + window > whole.height) {
+    return {};
+  }
+  std::vector<cv::Mat> level{base()};
+  if (flow_levels.empty() && !flow_gradients.empty()) level.push_back(flow_gradients.front());
+  return level;
+}
+
 std::shared_ptr<FastCornerCache> ImagePyramid::corners() const {
   return fast_corners ? fast_corners : std::make_shared<FastCornerCache>(base());
 }

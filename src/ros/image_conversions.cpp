@@ -82,7 +82,8 @@ CameraImage convert(const sensor_msgs::Image& msg, const boost::shared_ptr<const
   result.owner = bridged;
   const int expected = CV_MAKETYPE(encodings::bitDepth(bridged->encoding) == 16 ? CV_16U : CV_8U,
                                    encodings::numChannels(bridged->encoding));
-  if (result.image.type() != expected && result.image.elemSize() == CV_ELEM_SIZE(expected)) {
+  if (result.image.type() != expected &&
+      result.image.elemSize() == static_cast<std::size_t>(CV_ELEM_SIZE(expected))) {
     // cv_bridge 1.16 swaps big-endian 16-bit data into the machine's order but returns it as
     // bytes (CV_8UC2; its reshape is discarded): view the swapped pixels as what they are.
     result.image = cv::Mat(result.image.rows, result.image.cols, expected, result.image.data,

@@ -16,6 +16,8 @@ constexpr double kDegToRad = M_PI / 180.0;
 constexpr int kOrbPatchSize = 31;
 /// A match whose alignment moves the other keyframe's pixel farther than this is dropped.
 constexpr double kMaxRefinementPx = 2.0;
+/// The window of that alignment (px).
+constexpr int kRefinementWindow = 11;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -128,6 +130,7 @@ KeyframeTriangulation::Described KeyframeTriangulation::describe(
   Described described;
   described.id = id;
   described.image = image.base();  // shared, not copied
+  described.image_for_flow = image.baseLevelForLucasKanade(kRefinementWindow);
   std::vector<cv::KeyPoint> corners =
       features::detectSpreadCorners(image, params_.max_features, detection_, occupied);
   described.descriptors = describeCorners(image.base(), &corners);
@@ -163,6 +166,7 @@ std::vector<TriangulatedPoint> KeyframeTriangulation::addKeyframe(
   Described kept;
   kept.id = id;
   kept.image = current.image;
+  kept.image_for_flow = current.image_for_flow;
   for (std::size_t i = 0; i < current.px.size(); ++i) {
     if (current.used[i]) continue;
     kept.px.push_back(current.px[i]);
@@ -250,8 +254,12 @@ std::vector<std::optional<Eigen::Vector2d>> KeyframeTriangulation::refine(
   }
   std::vector<unsigned char> ok;
   std::vector<float> error;
+  const auto flow_input = [](const Described& d) {
+    return d.image_for_flow.empty() ? cv::_InputArray(d.image) : cv::_InputArray(d.image_for_flow);
+  };
   cv::calcOpticalFlowPyrLK(
-      current.image, other.image, from, to, ok, error, cv::Size(11, 11), 0,
+      flow_input(current), flow_input(other), from, to, ok, error,
+      cv::Size(kRefinementWindow, kRefinementWindow), 0,
       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01),
       cv::OPTFLOW_USE_INITIAL_FLOW);
   for (std::size_t k = 0; k < pairs.size(); ++k) {

@@ -191,5 +191,45 @@ TEST(ImagePreparation, GradientsBuiltWithThePyramidGiveTheSameFlow) {
   }
 }
 
+// The base level as a one-level pyramid (the keyframe triangulation's alignment): with its
+// gradient the same tracks as from the bare image, which the call pads and differentiates itself;
+// not offered when the padding is narrower than the window, and never with the gradient of the
+// normalised image, which is not the base's.
+TEST(ImagePreparation, TheBaseLevelWithItsGradientGivesTheSameFlowAsTheBareImage) {
+  const cv::Mat first = test::texturedImage(320, 240, 9);
+  cv::Mat second;
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, 1.3, 0, 1, 0.8);
+  cv::warpAffine(first, second, shift, first.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
+  std::vector<cv::Point2f> from;
+  for (int y = 5; y < 240; y += 17) {  // near the borders too: the padding is read there
+    for (int x = 3; x < 320; x += 19)
+      from.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  const cv::TermCriteria criteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 20, 0.01);
+  const ImagePyramid a = buildPyramid(first, 3, 11);
+  const ImagePyramid b = buildPyramid(second, 3, 11);
+  const std::vector<cv::Mat> a_base = a.baseLevelForLucasKanade(11);
+  ASSERT_EQ(a_base.size(), 2u);
+  EXPECT_EQ(a_base[1].type(), CV_16SC2);
+  std::vector<cv::Point2f> with = from, without = from;
+  std::vector<unsigned char> ok_with, ok_without;
+  std::vector<float> error;
+  cv::calcOpticalFlowPyrLK(a_base, b.baseLevelForLucasKanade(11), from, with, ok_with, error,
+                           cv::Size(11, 11), 0, criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(first, second, from, without, ok_without, error, cv::Size(11, 11), 0,
+                           criteria, cv::OPTFLOW_USE_INITIAL_FLOW);
+  int tracked = 0;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    ASSERT_EQ(ok_with[i], ok_without[i]) << "point " << i;
+    EXPECT_NEAR(with[i].x, without[i].x, 1e-4) << "point " << i;
+    EXPECT_NEAR(with[i].y, without[i].y, 1e-4) << "point " << i;
+    tracked += ok_with[i] && std::abs(with[i].x - from[i].x - 1.3f) < 0.2f &&
+               std::abs(with[i].y - from[i].y - 0.8f) < 0.2f;
+  }
+  EXPECT_GT(tracked, static_cast<int>(from.size()) / 2);
+  EXPECT_TRUE(a.baseLevelForLucasKanade(13).empty());  // padded by 11 only
+  EXPECT_EQ(buildPyramid(first, 3, 11, 7).baseLevelForLucasKanade(11).size(), 1u);
+}
+
 }  // namespace
 }  // namespace scale_drift_slam::features

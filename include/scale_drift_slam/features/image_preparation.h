@@ -55,6 +55,11 @@ struct ImagePyramid {
   /// The first `num_levels` flow levels as cv::calcOpticalFlowPyrLK takes a pyramid: each level
   /// followed by its gradient when they were built.
   std::vector<cv::Mat> lucasKanadePyramid(int num_levels) const;
+  /// The base level alone as cv::calcOpticalFlowPyrLK takes a one-level pyramid: followed by
+  /// its gradient when one was built for it (not for the normalised flow levels), so that the
+  /// call does not compute it again. Empty when the padding is narrower than `window` (the call
+  /// then needs the bare image, which it pads itself).
+  std::vector<cv::Mat> baseLevelForLucasKanade(int window) const;
   /// FAST corners of the base level, detected once and shared by the copies of this pyramid
   /// (set by buildPyramid).
   std::shared_ptr<FastCornerCache> fast_corners;

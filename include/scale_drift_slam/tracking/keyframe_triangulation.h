@@ -97,6 +97,9 @@ class KeyframeTriangulation {
     cv::Mat descriptors;  ///< One row (32 bytes) per corner.
     std::vector<bool> used;
     cv::Mat image;  ///< The keyframe's grey image (shared with its pyramid).
+    /// The same with its gradient, padded, for the refinement's Lucas-Kanade
+    /// (ImagePyramid::baseLevelForLucasKanade); empty: `image` is given bare.
+    std::vector<cv::Mat> image_for_flow;
   };
 
   Described describe(map::KeyframeId id, const features::ImagePyramid& image,
