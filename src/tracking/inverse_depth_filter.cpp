@@ -85,6 +85,7 @@ InverseDepthFilter::Update InverseDepthFilter::update(const geometry::SE3& T_cam
                                                       const Eigen::Vector2d& xy) {
   constexpr double kDegree = 3.14159265358979323846 / 180.0;
   if (parallax(T_cam_world, xy) < params_.min_parallax_deg * kDegree) return Update::kLowParallax;
+  if (focal_length_px_ * (xy - y_.head<2>()).norm() < kSensorFixedPx) return Update::kRejected;
   const geometry::SE3 T_cur_org = T_cam_world * T_origin_world_.inverse();
   const Eigen::Matrix3d R = T_cur_org.rotationMatrix();
   const Eigen::Vector3d t = T_cur_org.translation();

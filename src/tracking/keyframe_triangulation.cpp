@@ -8,6 +8,8 @@
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "scale_drift_slam/tracking/inverse_depth_filter.h"
+
 namespace scale_drift_slam::tracking {
 namespace {
 
@@ -304,6 +306,7 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
     const Eigen::Vector3d ray_cur = (*p - c_cur).normalized(),
                           ray_other = (*p - c_other).normalized();
     if (ray_cur.dot(ray_other) > cos_min_parallax) continue;
+    if ((current.px[i] - *refined[k]).norm() < kSensorFixedPx) continue;  // fixed to the sensor
     current.used[i] = true;
     other.used[j] = true;
     points->push_back({*p, current.px[i], current.xy[i], other.id, xy_other});

@@ -116,6 +116,30 @@ TEST(InverseDepthFilter, TheParallaxGateAndTheOutlierGateLeaveTheStateUnchanged)
   EXPECT_EQ(filter.numUpdates(), 1);
 }
 
+// A feature that keeps its pixel while the camera slides and turns: texture fixed to the sensor
+// (kSensorFixedPx). The views are built so that a world point at 0.4 m does the same (the slide
+// undoes the turn's image motion), so every other test the filter makes passes; it used to be
+// updated towards that depth and promoted. A point 2 px from there is updated as before.
+TEST(InverseDepthFilter, AFeatureThatKeepsItsPixelThroughParallaxIsFixedToTheSensor) {
+  const geometry::SE3 T0;  // the origin camera at the world's origin
+  const Eigen::Vector3d p(0.1, 0.02, 0.4);
+  const Eigen::Matrix3d R =
+      geometry::SE3::exp((geometry::SE3::Tangent() << 0, 0.05, 0, 0, 0, 0).finished())
+          .rotationMatrix();                    // 2.9 degrees about the vertical
+  const geometry::SE3 T1(R, 1.05 * p - R * p);  // p at the same pixel, 5 % further away
+  const Eigen::Vector2d xy = p.head<2>() / p.z();
+  const Eigen::Vector3d in_1 = T1 * p;
+  ASSERT_LT(kFocal * (in_1.head<2>() / in_1.z() - xy).norm(), 1e-9);
+  InverseDepthFilter fixed(1, T0, xy, 2.0, kFocal, InverseDepthFilterParams());
+  ASSERT_GT(fixed.parallax(T1, xy), 2.0 * M_PI / 180.0);
+  EXPECT_EQ(fixed.update(T1, xy), InverseDepthFilter::Update::kRejected);
+  EXPECT_EQ(fixed.numUpdates(), 0);
+  // The same views, the point 2 px along the epipolar line: the world, updated.
+  InverseDepthFilter world(1, T0, xy, 2.0, kFocal, InverseDepthFilterParams());
+  const Eigen::Vector2d moved = xy + Eigen::Vector2d(2.0 / kFocal, 0.0);
+  EXPECT_EQ(world.update(T1, moved), InverseDepthFilter::Update::kUpdated);
+}
+
 TEST(FeaturePromotion, AcceptsAConsistentPointAndRejectsALargeError) {
   const InverseDepthFilter filter = runFilter(6.0, 1.5, 9);
   const geometry::SE3 T0 = cameraAt(0.0);

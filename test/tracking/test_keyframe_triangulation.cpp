@@ -108,6 +108,45 @@ TEST(KeyframeTriangulation, LeavesOccupiedPixelsAndForgottenKeyframesAlone) {
       forgetful.addKeyframe(1, poses[1], render(poses[1]), {}, *camera, posesOf({})).empty());
 }
 
+// Texture fixed to the sensor (a saturated sensor's fixed pattern, dust, a burnt-in overlay) sits
+// at the same pixels in both keyframes. A camera that slides sideways and turns against the slide
+// has nearly horizontal epipolar lines, so each such corner about the horizon lies on its own
+// epipolar line, matches itself by descriptor, and the turn gives it parallax: 10 of them were
+// triangulated (at the depth where the slide undoes the turn), map points that hold a pose still.
+TEST(KeyframeTriangulation, TextureFixedToTheSensorMakesNoPoint) {
+  const auto camera = test::pinholeCamera(kFocal);
+  const std::vector<geometry::SE3> poses = {pose(0.0, 0.0), pose(0.3, -0.07)};
+  const cv::Rect patch(20, 180, 200, 120);  // about the horizon: on its own epipolar line
+  const cv::Mat fixed = test::texturedImage(patch.width, patch.height, 5);
+  const auto render_with_patch = [&](const geometry::SE3& T_cam_world) {
+    cv::Mat image =
+        test::renderPlanes({wall()}, test::pinholeCamera(kFocal)->K(), T_cam_world, 640, 480);
+    fixed.copyTo(image(patch));
+    return features::buildPyramid(image, 4, 15);
+  };
+  KeyframeTriangulation triangulation(KeyframeTriangulationParams{},
+                                      features::FeatureDetectionParams{}, kFocal);
+  triangulation.addKeyframe(0, poses[0], render_with_patch(poses[0]), {}, *camera, posesOf(poses));
+  const std::vector<TriangulatedPoint> points = triangulation.addKeyframe(
+      1, poses[1], render_with_patch(poses[1]), {}, *camera, posesOf(poses));
+  // A corner on the patch's edge is half wall, half patch: neither counted nor checked.
+  const cv::Rect inside(patch.x + 4, patch.y + 4, patch.width - 8, patch.height - 8);
+  const cv::Rect edge(patch.x - 8, patch.y - 8, patch.width + 16, patch.height + 16);
+  int on_patch = 0;
+  std::vector<double> errors;
+  for (const TriangulatedPoint& p : points) {
+    const cv::Point2d px(p.px.x(), p.px.y());
+    on_patch += inside.contains(px);
+    if (!edge.contains(px)) errors.push_back(std::abs(p.p_world.z() - kWallDepth) / kWallDepth);
+  }
+  EXPECT_EQ(on_patch, 0);  // 10 before
+  // The wall's points are made as before.
+  ASSERT_GT(errors.size(), 60u);
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.01);
+  EXPECT_LT(errors[static_cast<std::size_t>(0.9 * errors.size())], 0.05);
+}
+
 TEST(KeyframeTriangulation, EpipolarDistanceIsZeroForATrueMatchAndGrowsOffTheLine) {
   const geometry::SE3 T_a_world = pose(0.0, 0.0), T_b_world = pose(0.3, 0.07);
   const Eigen::Vector3d p(0.2, -0.1, 3.0);

@@ -44,6 +44,14 @@ struct InverseDepthFilterParams {
 double parallaxAngle(const Eigen::Matrix3d& R_cur_org, const Eigen::Vector2d& xy_origin,
                      const Eigen::Vector2d& xy_current);
 
+/// A feature that keeps its pixel (within this many) between two views with parallax is taken
+/// for texture fixed to the sensor: a saturated sensor's fixed pattern, dust on the lens, an
+/// overlay burnt into the image. No point of the world keeps its pixel while the parallax
+/// (rotation-compensated, above) says the view changed, except where the translation happens to
+/// undo the rotation's image motion; texture fixed to the sensor does so at every pixel, and
+/// triangulated there it becomes map points that hold the pose still.
+constexpr double kSensorFixedPx = 1.0;
+
 class InverseDepthFilter {
  public:
   enum class Update { kUpdated, kLowParallax, kRejected };
