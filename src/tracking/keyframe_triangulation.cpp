@@ -6,8 +6,10 @@
 #include <stdexcept>
 
 #include <opencv2/core/hal/hal.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "scale_drift_slam/features/active_search.h"
 #include "scale_drift_slam/tracking/inverse_depth_filter.h"
 
 namespace scale_drift_slam::tracking {
@@ -20,6 +22,24 @@ constexpr int kOrbPatchSize = 31;
 constexpr double kMaxRefinementPx = 2.0;
 /// The window of that alignment (px).
 constexpr int kRefinementWindow = 11;
+/// The side of the patches compared for texture fixed to the sensor (as active search's).
+constexpr int kFixedPatternPatch = 9;
+/// A patch that correlates above this with the same pixel of the other keyframe, and better than
+/// with its match there, is the sensor's texture, not the point's.
+constexpr double kFixedPatternNcc = 0.8;
+
+/// NCC of the kFixedPatternPatch-sided patches about `pa` in `a` and `pb` in `b` (bilinear).
+double patchCorrelation(const cv::Mat& a, const Eigen::Vector2d& pa, const cv::Mat& b,
+                        const Eigen::Vector2d& pb) {
+  const cv::Size side(kFixedPatternPatch, kFixedPatternPatch);
+  cv::Mat patch_a, patch_b;
+  cv::getRectSubPix(a, side, cv::Point2f(static_cast<float>(pa.x()), static_cast<float>(pa.y())),
+                    patch_a, CV_32F);
+  cv::getRectSubPix(b, side, cv::Point2f(static_cast<float>(pb.x()), static_cast<float>(pb.y())),
+                    patch_b, CV_32F);
+  return features::normalizedCrossCorrelation(patch_a.ptr<float>(), patch_b.ptr<float>(),
+                                              side.area());
+}
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -307,6 +327,15 @@ void KeyframeTriangulation::match(Described& current, const geometry::SE3& T_cur
                           ray_other = (*p - c_other).normalized();
     if (ray_cur.dot(ray_other) > cos_min_parallax) continue;
     if ((current.px[i] - *refined[k]).norm() < kSensorFixedPx) continue;  // fixed to the sensor
+    // A point of the world whose patch is mostly texture fixed to the sensor (a saturated
+    // sensor's pattern brought out by the contrast stretch, where the scene is nearly flat): the
+    // corner moved, but its patch is found unchanged where it was.
+    const double at_same_pixel =
+        patchCorrelation(current.image, current.px[i], other.image, current.px[i]);
+    if (at_same_pixel > kFixedPatternNcc &&
+        at_same_pixel > patchCorrelation(current.image, current.px[i], other.image, *refined[k])) {
+      continue;
+    }
     current.used[i] = true;
     other.used[j] = true;
     points->push_back({*p, current.px[i], current.xy[i], other.id, xy_other});
