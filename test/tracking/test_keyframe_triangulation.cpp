@@ -39,6 +39,15 @@ features::ImagePyramid render(const geometry::SE3& T_cam_world) {
       test::renderPlanes({wall()}, test::pinholeCamera(kFocal)->K(), T_cam_world, 640, 480), 4, 15);
 }
 
+/// At least `at_least` relative depth errors against the wall, the median within 1 % and 90 %
+/// within 5 % (what the alignment gives on the clear wall).
+void expectOnTheWall(std::vector<double> errors, std::size_t at_least) {
+  ASSERT_GT(errors.size(), at_least);
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.01);
+  EXPECT_LT(errors[static_cast<std::size_t>(0.9 * errors.size())], 0.05);
+}
+
 KeyframeTriangulation::PoseLookup posesOf(std::vector<geometry::SE3> poses) {
   return [poses](map::KeyframeId id) -> std::optional<geometry::SE3> {
     if (id >= poses.size()) return std::nullopt;
@@ -140,12 +149,8 @@ TEST(KeyframeTriangulation, TextureFixedToTheSensorMakesNoPoint) {
     on_patch += inside.contains(px);
     if (!edge.contains(px)) errors.push_back(std::abs(p.p_world.z() - kWallDepth) / kWallDepth);
   }
-  EXPECT_EQ(on_patch, 0);  // 10 before
-  // The wall's points are made as before.
-  ASSERT_GT(errors.size(), 60u);
-  std::sort(errors.begin(), errors.end());
-  EXPECT_LT(errors[errors.size() / 2], 0.01);
-  EXPECT_LT(errors[static_cast<std::size_t>(0.9 * errors.size())], 0.05);
+  EXPECT_EQ(on_patch, 0);       // 10 before
+  expectOnTheWall(errors, 60);  // the wall's points are made as before
 }
 
 // Where the scene is nearly flat (a saturated part of the view) a sensor's fixed pattern, brought
@@ -191,10 +196,7 @@ TEST(KeyframeTriangulation, ACornerWhosePatchIsTheSensorsPatternMakesNoPoint) {
     patterned += ncc.at<float>(0, 0) > 0.8f;
   }
   EXPECT_EQ(patterned, 0);  // 2 before
-  ASSERT_GT(errors.size(), 40u);
-  std::sort(errors.begin(), errors.end());
-  EXPECT_LT(errors[errors.size() / 2], 0.01);
-  EXPECT_LT(errors[static_cast<std::size_t>(0.9 * errors.size())], 0.05);
+  expectOnTheWall(errors, 40);
 }
 
 TEST(KeyframeTriangulation, EpipolarDistanceIsZeroForATrueMatchAndGrowsOffTheLine) {
