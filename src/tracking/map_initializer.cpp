@@ -4,7 +4,11 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include <Eigen/SVD>
+
 #include "scale_drift_slam/common/statistics.h"
+#include "scale_drift_slam/geometry/rolling_shutter_camera.h"
+#include "scale_drift_slam/geometry/so3.h"
 
 namespace scale_drift_slam::tracking {
 
@@ -27,6 +31,26 @@ OpticalFlowParams initializerFlow(OpticalFlowParams params) {
   params.method = FlowMethod::kLucasKanade;
   params.max_forward_backward_px = 1.0;  // initial tracks must be clean: check both ways
   return params;
+}
+
+/// The rotation rate (rad/s) that turns the rays of `from` onto those of `to` over `interval`
+/// (the least-squares rotation between the unit rays, by SVD): the camera's turn between two
+/// frames, which dominates a rolling shutter's shear.
+Eigen::Vector3d rotationRate(const std::vector<cv::Point2f>& from,
+                             const std::vector<cv::Point2f>& to, double interval,
+                             const geometry::CameraModel& camera) {
+  if (from.size() < 3 || !(interval > 0.0)) return Eigen::Vector3d::Zero();
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const Eigen::Vector3d a = camera.unproject(Eigen::Vector2d(from[i].x, from[i].y)).normalized();
+    const Eigen::Vector3d b = camera.unproject(Eigen::Vector2d(to[i].x, to[i].y)).normalized();
+    H += a * b.transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();  // b = R a
+  return geometry::logSO3(Eigen::Quaterniond(R)) / interval;
 }
 
 }  // namespace
@@ -59,6 +83,8 @@ void MapInitializer::startReference(double timestamp, const features::ImagePyram
   current_px_ = reference_px_;
   frames_since_reference_ = 0;
   reference_timestamp_ = timestamp;
+  previous_timestamp_ = timestamp;
+  reference_rate_ = current_rate_ = Eigen::Vector3d::Zero();
   reference_image_ = image;
   previous_image_ = image;
   has_reference_ = static_cast<int>(reference_px_.size()) >= params_.min_tracks;
@@ -79,8 +105,11 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
   flow_.track(previous_image_, image, current_px_, &next, &ok);
   std::size_t kept = 0;
   std::vector<double> disparity;
+  std::vector<cv::Point2f> step_from, step_to;
   for (std::size_t i = 0; i < next.size(); ++i) {
     if (!ok[i]) continue;
+    step_from.push_back(current_px_[i]);
+    step_to.push_back(next[i]);
     reference_px_[kept] = reference_px_[i];
     current_px_[kept] = next[i];
     const cv::Point2f d = next[i] - reference_px_[kept];
@@ -91,6 +120,12 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
   current_px_.resize(kept);
   previous_image_ = image;
   ++frames_since_reference_;
+  if (camera_->calibration().rolling_shutter_readout_s > 0.0) {
+    // The reference frame's rate is measured on the step after it.
+    current_rate_ = rotationRate(step_from, step_to, timestamp - previous_timestamp_, *camera_);
+    if (frames_since_reference_ == 1) reference_rate_ = current_rate_;
+  }
+  previous_timestamp_ = timestamp;
   if (static_cast<int>(kept) < params_.min_tracks || frames_since_reference_ > params_.max_frames) {
     const std::string why = "restarting (" + std::to_string(kept) + " tracks after " +
                             std::to_string(frames_since_reference_) + " frames): ";
@@ -103,12 +138,16 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
     status_ = "waiting for motion (median disparity " + std::to_string(median_disparity) + " px)";
     return std::nullopt;
   }
+  // Each view's pixels as a global shutter at its stamp would see them (the camera itself for a
+  // global shutter).
+  const auto first_camera = geometry::frameCamera(camera_, reference_rate_, {}, 1.0);
+  const auto second_camera = geometry::frameCamera(camera_, current_rate_, {}, 1.0);
   InitialMap map;
   for (std::size_t i = 0; i < kept; ++i) {
     map.px_first.emplace_back(reference_px_[i].x, reference_px_[i].y);
     map.px_second.emplace_back(current_px_[i].x, current_px_[i].y);
-    map.xy_first.push_back(camera_->undistortToNormalized(map.px_first.back()));
-    map.xy_second.push_back(camera_->undistortToNormalized(map.px_second.back()));
+    map.xy_first.push_back(first_camera->undistortToNormalized(map.px_first.back()));
+    map.xy_second.push_back(second_camera->undistortToNormalized(map.px_second.back()));
   }
   const double focal = camera_->calibration().meanFocalLength();
   TwoViewResult result = reconstructTwoView(map.xy_first, map.xy_second, focal, params_.two_view);

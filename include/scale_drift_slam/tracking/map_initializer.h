@@ -4,7 +4,10 @@
 // Lucas-Kanade; once they have moved enough, reconstructTwoView (two_view_reconstruction.h)
 // tries to build the initial map. A refusal (too little parallax, pure rotation, ambiguity) just
 // waits for more motion; when too few tracks survive or too many frames pass, the reference is
-// replaced by the current frame. Owned and run by the tracking thread.
+// replaced by the current frame. With a rolling shutter each of the two views is measured as a
+// global shutter at its stamp would see it (geometry::RollingShutterCamera), from the rotation
+// rate of its frame-to-frame tracks: a view taken as the camera starts to pan is sheared unlike
+// the still one before it. Owned and run by the tracking thread.
 
 #include <memory>
 #include <optional>
@@ -76,6 +79,12 @@ class MapInitializer {
   features::ImagePyramid reference_image_, previous_image_;
   std::vector<cv::Point2f> reference_px_, current_px_;
   int frames_since_reference_ = 0;
+  double previous_timestamp_ = 0.0;
+  /// The camera's rotation rate (rad/s, see geometry::RollingShutterCamera) at the reference
+  /// frame and at the latest one, measured from their frame-to-frame tracks: a rolling shutter's
+  /// rows are measured from the camera turning at these rates (zero for a global shutter).
+  Eigen::Vector3d reference_rate_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d current_rate_ = Eigen::Vector3d::Zero();
   std::string status_ = "no frame yet";
 };
 
