@@ -124,6 +124,31 @@ TEST(KeyframeRule, DropsWhenTheViewTurnedAwayFromTheNearbyKeyframes) {
                std::invalid_argument);
 }
 
+TEST(KeyframeRule, AStarvingMapThatTurnedAwayDropsWithoutBaseline) {
+  // A hand-held pan: the camera turns faster than it moves, and the map points leave the view
+  // before the baseline comes. Below min_tracked_points a turned view drops a keyframe anyway,
+  // so that new features are spawned where the view went.
+  const std::vector<std::pair<map::KeyframeId, Eigen::Vector3d>> keyframes = {
+      {3, Eigen::Vector3d(0, 0, 0)}};
+  KeyframeRuleParams params;  // threshold 0.4 at depth 4, parallax from 0.1
+  params.max_view_turn_fraction = 0.25;
+  params.min_tracked_points = 50;
+  const Eigen::Vector3d barely_moved(0.02, 0, 0);
+  const Eigen::Vector3d turned(std::sin(0.3), 0, std::cos(0.3));
+  ViewDirections view{turned, {Eigen::Vector3d::UnitZ()}, 1.0};
+  KeyframeDecision d =
+      decideKeyframe(barely_moved, keyframes, 4.0, params, TrackedPoints{30, 200}, view);
+  EXPECT_TRUE(d.drop);
+  EXPECT_TRUE(d.view_turned);
+  EXPECT_FALSE(d.view_leaving_map);  // that rule still waits for the baseline
+  // Not starving, or starving without a turn (a still camera on a weak map): wait.
+  EXPECT_FALSE(
+      decideKeyframe(barely_moved, keyframes, 4.0, params, TrackedPoints{60, 200}, view).drop);
+  view.current = Eigen::Vector3d(std::sin(0.2), 0, std::cos(0.2));
+  EXPECT_FALSE(
+      decideKeyframe(barely_moved, keyframes, 4.0, params, TrackedPoints{30, 200}, view).drop);
+}
+
 TEST(KeyframeRule, DrivingForwardWaitsForTheParallaxASidewaysStepWouldGive) {
   // Points on two walls 4 m to either side and 20-60 m ahead; the camera drives along z.
   std::vector<Eigen::Vector3d> walls;
