@@ -140,8 +140,8 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
   }
   // Each view's pixels as a global shutter at its stamp would see them (the camera itself for a
   // global shutter).
-  const auto first_camera = geometry::frameCamera(camera_, reference_rate_, {}, 1.0);
-  const auto second_camera = geometry::frameCamera(camera_, current_rate_, {}, 1.0);
+  const auto first_camera = geometry::frameCamera(camera_, reference_rate_, Eigen::Vector3d::Zero(), 1.0);
+  const auto second_camera = geometry::frameCamera(camera_, current_rate_, Eigen::Vector3d::Zero(), 1.0);
   InitialMap map;
   for (std::size_t i = 0; i < kept; ++i) {
     map.px_first.emplace_back(reference_px_[i].x, reference_px_[i].y);
@@ -161,6 +161,7 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
   map.triangulated = std::move(result.triangulated);
   map.first_image = reference_image_;
   map.used_homography = result.used_homography;
+  map.second_camera = second_camera;
   char parallax[32];
   std::snprintf(parallax, sizeof(parallax), "%.1f", result.median_parallax_deg);
   status_ = "initialised from " + std::to_string(result.num_triangulated) + " points (" +

@@ -420,7 +420,9 @@ void Tracker::initialise(double timestamp, const features::ImagePyramid& image,
 
 void Tracker::startMap(const InitialMap& initial, double timestamp,
                        const features::ImagePyramid& image, FrameResult* result) {
-  frame_camera_ = camera_;  // no motion known yet: measured as a global shutter
+  // The second view's free corners and new features are measured as the initializer measured
+  // the view (a rolling shutter turning at its tracks' rate).
+  frame_camera_ = initial.second_camera ? initial.second_camera : camera_;
   map::KeyframeMessage first =
       makeKeyframe(initial.first_timestamp, geometry::SE3(), initial.first_image);
   map::KeyframeMessage second = makeKeyframe(timestamp, initial.T_second_first, image);

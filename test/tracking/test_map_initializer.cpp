@@ -162,6 +162,33 @@ TEST(MapInitializer, MeasuresARollingShutterPanAsAGlobalShutter) {
   // and 0.94 deg.
   expectMotion(run, T_cam_world_at(run.map->first_timestamp), T_cam_world_at(run.frame / 30.0),
                0.08, 0.5);
+  // The tracker measures the second keyframe's new corners with the camera the initializer
+  // measured that view with: a point seen on any row lands where a global shutter at the stamp
+  // would see it.
+  ASSERT_TRUE(run.map->second_camera);
+  const double stamp = run.frame / 30.0;
+  double worst_measured = 0.0, worst_plain = 0.0;
+  for (double x = -1.5; x <= 1.5; x += 0.5) {
+    for (double y = -1.0; y <= 1.0; y += 0.5) {
+      const Eigen::Vector3d p_world(x + 0.3 * stamp, y, 4.0);
+      const std::optional<Eigen::Vector2d> global =
+          rolling->project(T_cam_world_at(stamp) * p_world);
+      if (!global) continue;
+      Eigen::Vector2d px = *global;  // the row's time depends on where the point lands
+      for (int i = 0; i < 5; ++i) {
+        const double tau = 0.03 * ((px.y() + 0.5) / kHeight - 0.5);
+        px = rolling->project(T_cam_world_at(stamp + tau) * p_world).value_or(px);
+      }
+      if (px.y() < 0 || px.y() >= kHeight || px.x() < 0 || px.x() >= kWidth) continue;
+      const Eigen::Vector2d xy = rolling->undistortToNormalized(*global);
+      const double f = rolling->calibration().meanFocalLength();
+      worst_measured = std::max(
+          worst_measured, f * (run.map->second_camera->undistortToNormalized(px) - xy).norm());
+      worst_plain = std::max(worst_plain, f * (rolling->undistortToNormalized(px) - xy).norm());
+    }
+  }
+  EXPECT_LT(worst_measured, 1.0);
+  EXPECT_GT(worst_plain, 5.0);
 }
 
 TEST(MapInitializer, SurvivesBlackAndBlankFrames) {

@@ -49,6 +49,9 @@ struct InitialMap {
   std::vector<bool> triangulated;
   features::ImagePyramid first_image;
   bool used_homography = false;
+  /// The camera that measured the second view: a rolling shutter turning at the rate its tracks
+  /// measured (the camera itself for a global shutter).
+  std::shared_ptr<const geometry::CameraModel> second_camera;
 };
 
 class MapInitializer {
