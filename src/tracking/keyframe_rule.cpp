@@ -120,24 +120,25 @@ KeyframeDecision decideKeyframe(
                          tracked->certain_candidates >= params.min_certain_candidates);
   // At an open crossing the near facades leave the view, the median depth of what is left
   // doubles and so does the distance threshold, just when new points are needed most.
-  const bool starving =
-      tracked && tracked->at_last_keyframe > 0 && tracked->now < params.min_tracked_points;
   if (!decision.drop && tracked && tracked->at_last_keyframe > 0) {
     decision.view_leaving_map =
-        (tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe || starving) &&
+        (tracked->now < params.min_tracked_ratio * tracked->at_last_keyframe ||
+         tracked->now < params.min_tracked_points) &&
         parallax;
     decision.drop = decision.view_leaving_map;
   }
-  // A starving map whose view turned away needs new features now, baseline or not: a hand-held
-  // pan turns faster than it moves, and the features are spawned only at keyframes.
-  if (!decision.drop && view && params.max_view_turn_fraction > 0.0 && (parallax || starving)) {
+  // A view that turned away from every nearby keyframe needs new features now, baseline or not:
+  // a hand-held pan turns faster than it moves (at 150 deg/s the map's points leave the view
+  // within a dozen frames, before their successors' depths are certain), and features are
+  // spawned only at keyframes. A camera turning on the spot drops one each time its view leaves
+  // the nearby keyframes' (a bounded number per place).
+  if (!decision.drop && view && params.max_view_turn_fraction > 0.0) {
     if (view->keyframes.size() != keyframe_centres.size()) {
       throw std::invalid_argument("keyframe rule: one viewing direction per keyframe expected");
     }
     // A nearby keyframe looking elsewhere does not cover this view: when the camera pans, the
     // map points leave the image within a few frames, and new ones are spawned and promoted only
-    // at keyframes (the baseline condition keeps a camera turning on the spot from dropping any
-    // while its map is fed).
+    // at keyframes.
     const double max_turn = params.max_view_turn_fraction * view->field_of_view;
     bool covered = false;
     for (std::size_t k = 0; k < keyframe_centres.size() && !covered; ++k) {
