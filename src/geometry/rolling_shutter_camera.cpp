@@ -81,4 +81,9 @@ std::shared_ptr<const CameraModel> frameCamera(const std::shared_ptr<const Camer
   return std::make_shared<RollingShutterCamera>(base, rotation_rate, velocity, scene_depth);
 }
 
+std::shared_ptr<const CameraModel> turningFrameCamera(
+    const std::shared_ptr<const CameraModel>& base, const Eigen::Vector3d& rotation_rate) {
+  return frameCamera(base, rotation_rate, Eigen::Vector3d::Zero(), 1.0);
+}
+
 }  // namespace scale_drift_slam::geometry

@@ -140,8 +140,8 @@ std::optional<InitialMap> MapInitializer::addFrame(double timestamp,
   }
   // Each view's pixels as a global shutter at its stamp would see them (the camera itself for a
   // global shutter).
-  const auto first_camera = geometry::frameCamera(camera_, reference_rate_, Eigen::Vector3d::Zero(), 1.0);
-  const auto second_camera = geometry::frameCamera(camera_, current_rate_, Eigen::Vector3d::Zero(), 1.0);
+  const auto first_camera = geometry::turningFrameCamera(camera_, reference_rate_);
+  const auto second_camera = geometry::turningFrameCamera(camera_, current_rate_);
   InitialMap map;
   for (std::size_t i = 0; i < kept; ++i) {
     map.px_first.emplace_back(reference_px_[i].x, reference_px_[i].y);

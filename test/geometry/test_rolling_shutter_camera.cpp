@@ -155,6 +155,16 @@ TEST(RollingShutterCamera, AGlobalShutterOrAStillCameraIsTheCameraItself) {
   EXPECT_LT((*still->project(p) - *rolling->project(p)).norm(), 1e-12);
   EXPECT_EQ(frameCamera(rolling, Eigen::Vector3d(NAN, 0.0, 0.0), moving, 2.0), rolling);
   EXPECT_EQ(frameCamera(rolling, Eigen::Vector3d::Zero(), moving, 0.0), rolling);
+  // Turning only: the same as a zero velocity (at any scene depth), the camera itself for a
+  // global shutter.
+  const Eigen::Vector3d rate(0.2, -2.5, 0.1);
+  const auto turning = turningFrameCamera(rolling, rate);
+  const auto zero_velocity = frameCamera(rolling, rate, Eigen::Vector3d::Zero(), 7.0);
+  EXPECT_LT((*turning->project(p) - *zero_velocity->project(p)).norm(), 1e-12);
+  const Eigen::Vector2d top_row(600.0, 3.0);
+  EXPECT_LT((turning->unproject(top_row) - zero_velocity->unproject(top_row)).norm(), 1e-12);
+  EXPECT_GT((turning->unproject(top_row) - rolling->unproject(top_row)).norm(), 1e-3);
+  EXPECT_EQ(turningFrameCamera(global, rate), global);
 }
 
 TEST(RollingShutterCamera, AnImpossibleReadoutIsRefusedWithAReason) {

@@ -58,5 +58,8 @@ class RollingShutterCamera : public CameraModel {
 std::shared_ptr<const CameraModel> frameCamera(const std::shared_ptr<const CameraModel>& base,
                                                const Eigen::Vector3d& rotation_rate,
                                                const Eigen::Vector3d& velocity, double scene_depth);
+/// The same for a camera that only turns (no translation during the readout, so no scene depth).
+std::shared_ptr<const CameraModel> turningFrameCamera(
+    const std::shared_ptr<const CameraModel>& base, const Eigen::Vector3d& rotation_rate);
 
 }  // namespace scale_drift_slam::geometry
