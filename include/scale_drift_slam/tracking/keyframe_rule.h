@@ -45,9 +45,8 @@ struct KeyframeRuleParams {
   /// 0: the distance alone).
   int min_certain_candidates = 40;
   /// Also drop when the viewing direction is more than this fraction of the camera's (narrowest)
-  /// field of view away from that of every keyframe within the distance threshold, given the
-  /// same parallax condition, or without it when fewer than min_tracked_points are tracked (0:
-  /// never).
+  /// field of view away from that of every keyframe within the distance threshold, parallax or
+  /// not (0: never).
   double max_view_turn_fraction = 0.25;
   /// Throws std::invalid_argument naming the bad value.
   void validate() const;
